@@ -1,3 +1,23 @@
-"""cracklab: spectral boundary-integral simulation of dynamic fracture on planar cracks."""
+"""cracklab: spectral boundary-integral simulation of dynamic fracture on planar cracks.
+
+Geubelle & Rice (1995), J. Mech. Phys. Solids 43(11): modes I, II and III, 3D and 2D.
+"""
 
 __version__ = "0.1.0"
+
+from . import kernels, scenes  # noqa: E402
+from .errors import InputError, SimulationError  # noqa: E402
+from .grid import Grid  # noqa: E402
+from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree  # noqa: E402
+from .loading import Loading, point_load  # noqa: E402
+from .material import Material  # noqa: E402
+from .modal import modal_response  # noqa: E402
+from .record import Record  # noqa: E402
+from .scene import Numerics, Scene  # noqa: E402
+from .simulate import scene_of, simulate, stations  # noqa: E402
+
+__all__ = [
+    "Grid", "InputError", "LinearCohesive", "Loading", "Material", "Numerics", "PrescribedRupture",
+    "Record", "Scene", "SimulationError", "SlipWeakening", "TractionFree", "kernels", "modal_response",
+    "point_load", "scene_of", "scenes", "simulate", "stations", "__version__",
+]

@@ -1,0 +1,113 @@
+"""Periodic grid on the fracture plane and its wave numbers (Eq. 36)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError, check_positive
+
+
+def is_fast_size(n: int) -> bool:
+    """True when n factors into 2, 3, 5 and 7 only (sizes FFTW and pocketfft do fast)."""
+    if n < 1:
+        return False
+    for p in (2, 3, 5, 7):
+        while n % p == 0:
+            n //= p
+    return n == 1
+
+
+def next_fast_size(n: int) -> int:
+    m = max(int(n), 2)
+    while not (is_fast_size(m) and m % 2 == 0):
+        m += 1
+    return m
+
+
+def _check_size(field: str, n) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise InputError(field, f"must be an integer, got {n!r}")
+    n = int(n)
+    if n < 1:
+        raise InputError(field, f"must be >= 1, got {n}")
+    return n
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Nodes x1_i = i L1/n1, x3_k = k L3/n3 on the periodic cell [0, L1) x [0, L3).
+
+    ``n3 == 1`` is the plane (x3-invariant) problem and uses 1D transforms.
+    """
+
+    n1: int
+    n3: int
+    L1: float
+    L3: float
+
+    def __post_init__(self):
+        n1 = _check_size("grid.n1", self.n1)
+        n3 = _check_size("grid.n3", self.n3)
+        for name, n in (("grid.n1", n1), ("grid.n3", n3)):
+            if name == "grid.n3" and n == 1:
+                continue
+            if n < 2 or n % 2 or not is_fast_size(n):
+                raise InputError(
+                    name,
+                    f"must be an even fast FFT size (2^a 3^b 5^c 7^d, >= 2), got {n}; "
+                    f"nearest larger is {next_fast_size(n)}",
+                )
+        object.__setattr__(self, "n1", n1)
+        object.__setattr__(self, "n3", n3)
+        object.__setattr__(self, "L1", check_positive("grid.L1", self.L1))
+        object.__setattr__(self, "L3", check_positive("grid.L3", self.L3))
+
+    @property
+    def plane(self) -> bool:
+        return self.n3 == 1
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return (self.n1, self.n3)
+
+    @property
+    def dx1(self) -> float:
+        return self.L1 / self.n1
+
+    @property
+    def dx3(self) -> float:
+        return self.L3 / self.n3
+
+    @property
+    def dx_min(self) -> float:
+        return self.dx1 if self.plane else min(self.dx1, self.dx3)
+
+    @property
+    def x1(self) -> np.ndarray:
+        return np.arange(self.n1) * self.dx1
+
+    @property
+    def x3(self) -> np.ndarray:
+        return np.arange(self.n3) * self.dx3
+
+    @property
+    def spectral_shape(self) -> tuple[int, int]:
+        """Half spectrum along x1 (real FFT), full spectrum along x3."""
+        return (self.n1 // 2 + 1, self.n3)
+
+    def wavenumbers(self) -> tuple[np.ndarray, np.ndarray]:
+        """k (along x1) and m (along x3) on the spectral layout, each of spectral_shape."""
+        k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
+        m = 2 * np.pi * np.fft.fftfreq(self.n3, d=self.dx3) if not self.plane else np.zeros(1)
+        return np.meshgrid(k, m, indexing="ij")
+
+    def q_max(self) -> float:
+        """Largest wave-vector magnitude on the grid."""
+        k, m = self.wavenumbers()
+        return float(np.sqrt(k**2 + m**2).max())
+
+    def nearest_node(self, x1: float, x3: float = 0.0) -> tuple[int, int]:
+        i = int(round(x1 / self.dx1)) % self.n1
+        k = 0 if self.plane else int(round(x3 / self.dx3)) % self.n3
+        return i, k

@@ -1,0 +1,26 @@
+"""History (time-convolution) engines.
+
+An engine serves one channel of modes (one kernel) and answers, at every step,
+S_n = sum_{j=0}^{n} w_j(gamma) x_{n-j}, the discrete convolution of Eq. (44)/(48)
+for each Fourier mode, where x_n is the value pushed at step n. The response layer
+owns the physical prefactors; laws and the stepper never see an engine.
+"""
+from __future__ import annotations
+
+from .direct import DirectEngine
+
+ENGINES = {"direct": DirectEngine}
+
+
+def make_engine(name: str, **kwargs):
+    """Build the history engine called ``name`` (see ``ENGINES``)."""
+    try:
+        cls = ENGINES[name]
+    except KeyError:
+        from ..errors import InputError
+
+        raise InputError("numerics.engine", f"must be one of {sorted(ENGINES)}, got {name!r}") from None
+    return cls(**kwargs)
+
+
+__all__ = ["DirectEngine", "ENGINES", "make_engine"]

@@ -1,0 +1,224 @@
+"""Interface laws: the strength of the plane and how it evolves (Eq. 38, Fig. 4).
+
+A law is a frozen dataclass of parameters (scalars or (n1, n3) fields) with three
+plain methods: ``init_state``, ``update`` (after the displacement update, step (i))
+and ``strength``. ``solve_velocity`` is step (v) of the algorithm, shared by all laws.
+Every law takes ``bonded``: a boolean (n1, n3) mask of points that never move.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+
+from .errors import InputError
+
+NORMAL = (2,)
+SHEAR = (1, 3)
+ALL = (1, 2, 3)
+
+
+def _check(law, name, lower=0.0, allow_equal=False):
+    """Validate a scalar or field parameter of ``law`` (> lower, or >= with allow_equal)."""
+    value = getattr(law, name)
+    field_name = f"law.{name}"
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(field_name, f"must be a number or an (n1, n3) field, got {value!r}") from None
+    bad = (arr < lower) if allow_equal else (arr <= lower)
+    if np.any(bad) or np.any(np.isnan(arr)):
+        op = ">=" if allow_equal else ">"
+        got = value if arr.ndim == 0 else f"a field with minimum {np.nanmin(arr):g}"
+        raise InputError(field_name, f"must be {op} {lower:g}, got {got}")
+    if arr.ndim == 0:
+        object.__setattr__(law, name, float(arr))
+
+
+@dataclass(frozen=True)
+class TractionFree:
+    """Traction-free plane, Lamb's problem; ``contact`` forbids interpenetration."""
+
+    contact: bool = False
+    bonded: np.ndarray | None = None
+    kind = "traction_free"
+    components = ALL
+
+    def init_state(self, grid):
+        return {}
+
+    def update(self, state, delta, dt, v_prev, t):
+        pass
+
+    def strength(self, state, t, grid):
+        return 0.0
+
+    def broken(self, state):
+        return True
+
+    def failed(self, state):
+        return None
+
+
+@dataclass(frozen=True)
+class LinearCohesive:
+    """Mode I linear cohesive law (Fig. 4): strength tau_c (1 - max opening/delta_c)^+.
+
+    No rehealing; inside the cohesive zone the opening rate cannot be negative;
+    broken faces may close but never interpenetrate. ``initial_crack`` marks points
+    broken at t = 0.
+    """
+
+    tau_c: float | np.ndarray
+    delta_c: float | np.ndarray
+    initial_crack: np.ndarray | None = None
+    bonded: np.ndarray | None = None
+    kind = "linear_cohesive"
+    components = NORMAL
+    contact = True
+
+    def __post_init__(self):
+        _check(self, "tau_c")
+        _check(self, "delta_c")
+
+    def init_state(self, grid):
+        dmax = np.zeros(grid.shape)
+        if self.initial_crack is not None:
+            dmax = np.where(self.initial_crack, np.inf, 0.0)
+        return {"delta_max": dmax}
+
+    def update(self, state, delta, dt, v_prev, t):
+        np.maximum(state["delta_max"], delta[2], out=state["delta_max"])
+
+    def strength(self, state, t, grid):
+        return self.tau_c * np.clip(1.0 - state["delta_max"] / self.delta_c, 0.0, 1.0)
+
+    def broken(self, state):
+        return state["delta_max"] >= self.delta_c
+
+    def failed(self, state):
+        return self.broken(state)
+
+
+@dataclass(frozen=True)
+class SlipWeakening:
+    """Linear slip-weakening friction: mu_s sigma_n -> mu_d sigma_n over D_c of slip.
+
+    ``sigma_n`` is the (compressive positive) normal stress; the slip is the
+    accumulated slip path. In 3D the slip rate is collinear with the shear traction.
+    """
+
+    mu_s: float | np.ndarray
+    mu_d: float | np.ndarray
+    D_c: float | np.ndarray
+    sigma_n: float | np.ndarray
+    bonded: np.ndarray | None = None
+    kind = "slip_weakening"
+    components = SHEAR
+
+    def __post_init__(self):
+        _check(self, "mu_s", allow_equal=True)
+        _check(self, "mu_d", allow_equal=True)
+        _check(self, "D_c")
+        _check(self, "sigma_n", allow_equal=True)
+        if np.any(np.asarray(self.mu_d) > np.asarray(self.mu_s)):
+            raise InputError("law.mu_d", "must be <= law.mu_s")
+
+    def init_state(self, grid):
+        return {"slip": np.zeros(grid.shape)}
+
+    def update(self, state, delta, dt, v_prev, t):
+        if v_prev is not None:
+            speed = np.sqrt(sum(v_prev[c] ** 2 for c in v_prev if c in SHEAR))
+            state["slip"] += dt * speed
+
+    def strength(self, state, t, grid):
+        weakening = np.clip(state["slip"] / self.D_c, 0.0, 1.0)
+        return (self.mu_s - (self.mu_s - self.mu_d) * weakening) * self.sigma_n
+
+    def broken(self, state):
+        return True
+
+    def failed(self, state):
+        return state["slip"] >= self.D_c
+
+
+@dataclass(frozen=True)
+class PrescribedRupture:
+    """Strength drops from ``strength`` to ``residual`` once t > r / speed (Kostrov tests).
+
+    r is the distance to the nucleation point ``origin`` = (x1, x3) in 3D, or to the
+    line x1 = origin[0] in the plane problem.
+    """
+
+    speed: float
+    origin: tuple = (0.0, 0.0)
+    residual: float | np.ndarray = 0.0
+    strength_before: float | np.ndarray = np.inf
+    bonded: np.ndarray | None = None
+    kind = "prescribed_rupture"
+    components = ALL
+    contact = False
+
+    def __post_init__(self):
+        _check(self, "speed")
+        _check(self, "residual", allow_equal=True)
+        _check(self, "strength_before", allow_equal=True)
+
+    def init_state(self, grid):
+        x1, x3 = np.meshgrid(grid.x1, grid.x3, indexing="ij")
+        r = np.abs(x1 - self.origin[0])
+        if not grid.plane:
+            r = np.hypot(r, x3 - self.origin[1])
+        return {"t_rupture": r / self.speed}
+
+    def update(self, state, delta, dt, v_prev, t):
+        state["_t"] = t
+
+    def strength(self, state, t, grid):
+        return np.where(t >= state["t_rupture"], self.residual, self.strength_before)
+
+    def broken(self, state):
+        return state.get("_t", 0.0) >= state["t_rupture"]
+
+    def failed(self, state):
+        return self.broken(state)
+
+
+LAWS = {cls.kind: cls for cls in (TractionFree, LinearCohesive, SlipWeakening, PrescribedRupture)}
+
+
+def law_parameters(law) -> dict:
+    """Parameters of a law as a dict (fields of the dataclass)."""
+    return {f.name: getattr(law, f.name) for f in fields(law)}
+
+
+def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
+    """Step (v): compare strength with the elastic estimate tau* and solve Eq. (3) for v.
+
+    ``tau_star[j]`` is the traction if the plane did not move further (load plus f_j).
+    Normal component: v = (tau* - S)/eta, non-negative where the point is not fully
+    broken, limited by contact. Shear: |v| = (|tau*| - S)^+/eta along tau*.
+    Returns (v, tau) as dicts over the active components.
+    """
+    v = {}
+    if 2 in tau_star:
+        v2 = (tau_star[2] - strength) / eta[2]
+        broken = law.broken(state)
+        v2 = np.where(broken, v2, np.maximum(v2, 0.0)) if broken is not True else v2
+        if getattr(law, "contact", False):
+            v2 = np.maximum(v2, -delta[2] / dt)
+        v[2] = v2
+    shear = [c for c in SHEAR if c in tau_star]
+    if shear:
+        mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))
+        excess = np.maximum(mag - strength, 0.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            scale = np.where(mag > 0, excess / (eta[shear[0]] * mag), 0.0)
+        for c in shear:
+            v[c] = scale * tau_star[c]
+    if law.bonded is not None:
+        for c in v:
+            v[c] = np.where(law.bonded, 0.0, v[c])
+    tau = {c: tau_star[c] - eta[c] * v[c] for c in v}
+    return v, tau

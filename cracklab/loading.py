@@ -1,0 +1,64 @@
+"""Loading: tau0_j(x1, x3) times a time function, Eq. (3).
+
+``tau0`` is the traction the plane would carry if it were welded. Time functions:
+"step" (H(t)) and "ramp" (min(t / ramp_time, 1)). With ``constant_K`` the load is
+scaled by sqrt(l0 / l(t)), l the mean crack length (section 4), so that the nominal
+stress intensity factor stays constant.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+
+TIME_FUNCTIONS = ("step", "ramp")
+
+
+@dataclass(frozen=True)
+class Loading:
+    tau0_1: float | np.ndarray = 0.0
+    tau0_2: float | np.ndarray = 0.0
+    tau0_3: float | np.ndarray = 0.0
+    time: str = "step"
+    ramp_time: float = 0.0
+    constant_K: bool = False
+    l0: float | None = None
+
+    def __post_init__(self):
+        if self.time not in TIME_FUNCTIONS:
+            raise InputError("loading.time", f"must be one of {TIME_FUNCTIONS}, got {self.time!r}")
+        if self.time == "ramp" and not float(self.ramp_time) > 0:
+            raise InputError("loading.ramp_time", f"must be > 0 for a ramp, got {self.ramp_time!r}")
+        for c in (1, 2, 3):
+            value = self.field(c)
+            if not np.all(np.isfinite(value)):
+                raise InputError(f"loading.tau0_{c}", "must be finite")
+
+    def field(self, component: int):
+        return getattr(self, f"tau0_{component}")
+
+    def loaded(self) -> tuple[int, ...]:
+        """Components with a non-zero load."""
+        return tuple(c for c in (1, 2, 3) if np.any(np.asarray(self.field(c)) != 0))
+
+    def factor(self, t: float, crack_length: float | None = None) -> float:
+        g = 1.0 if self.time == "step" else min(t / self.ramp_time, 1.0)
+        if t < 0:
+            g = 0.0
+        if self.constant_K and crack_length:
+            g *= np.sqrt(self.l0 / crack_length)
+        return g
+
+    def at(self, t: float, components, crack_length: float | None = None) -> dict:
+        g = self.factor(t, crack_length)
+        return {c: g * self.field(c) for c in components}
+
+
+def point_load(grid, P: float, x1: float, x3: float = 0.0) -> np.ndarray:
+    """Field tau0 = P / (dx1 dx3) at the node nearest (x1, x3), zero elsewhere (section 3.2)."""
+    f = np.zeros(grid.shape)
+    i, k = grid.nearest_node(x1, x3)
+    f[i, k] = P / (grid.dx1 * (grid.dx3 if not grid.plane else 1.0))
+    return f

@@ -1,0 +1,53 @@
+"""Isotropic linear elastic material of the two half spaces."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from .errors import InputError, check_positive
+
+
+@dataclass(frozen=True)
+class Material:
+    """Shear modulus ``mu``, shear wave speed ``cs`` and Poisson ratio ``nu``."""
+
+    mu: float
+    cs: float
+    nu: float
+
+    def __post_init__(self):
+        object.__setattr__(self, "mu", check_positive("material.mu", self.mu))
+        object.__setattr__(self, "cs", check_positive("material.cs", self.cs))
+        try:
+            nu = float(self.nu)
+        except (TypeError, ValueError):
+            raise InputError("material.nu", f"must be a number, got {self.nu!r}") from None
+        if not -1.0 < nu < 0.5:
+            raise InputError("material.nu", f"must be in (-1, 0.5), got {self.nu!r}")
+        object.__setattr__(self, "nu", nu)
+
+    @property
+    def a(self) -> float:
+        """c_d / c_s, with (c_d/c_s)^2 = 2(1-nu)/(1-2nu)."""
+        return float(np.sqrt(2.0 * (1.0 - self.nu) / (1.0 - 2.0 * self.nu)))
+
+    @property
+    def cd(self) -> float:
+        return self.a * self.cs
+
+    @property
+    def rho(self) -> float:
+        return self.mu / self.cs**2
+
+    @cached_property
+    def cR(self) -> float:
+        """Rayleigh wave speed."""
+        from .exact import rayleigh_speed_ratio
+
+        return float(rayleigh_speed_ratio(self.nu)) * self.cs
+
+    def eta(self, component: int) -> float:
+        """Radiation damping V_jj of Eq. (4): mu/(2 cs) for shear, mu a/(2 cs) for opening."""
+        return self.mu * (self.a if component == 2 else 1.0) / (2.0 * self.cs)

@@ -1,0 +1,79 @@
+"""What a run records: grid fields at a cadence, station series, rupture time."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+
+FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
+
+
+@dataclass(frozen=True)
+class Record:
+    """Grid ``fields`` every ``every`` steps or at ``times`` (optionally on ``region``,
+    {"x1": (lo, hi), "x3": (lo, hi)} in coordinates), and every step at ``stations``
+    {name: (x1, x3)}. With neither ``every`` nor ``times``, about 20 snapshots are kept."""
+
+    fields: tuple = ("delta_2",)
+    every: int | None = None
+    times: tuple | None = None
+    region: dict | None = None
+    stations: dict | None = None
+
+    def __post_init__(self):
+        if isinstance(self.fields, str):
+            object.__setattr__(self, "fields", (self.fields,))
+        object.__setattr__(self, "fields", tuple(self.fields))
+        for f in self.fields:
+            if f not in FIELDS:
+                raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}")
+        if self.every is not None:
+            if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
+                raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")
+        if self.times is not None:
+            object.__setattr__(self, "times", tuple(float(t) for t in np.atleast_1d(self.times)))
+        if self.every is not None and self.times is not None:
+            raise InputError("record.times", "give either record.every or record.times, not both")
+        if self.region is not None:
+            for key in self.region:
+                if key not in ("x1", "x3"):
+                    raise InputError(f"record.region.{key}", "unknown key; accepted: x1, x3")
+        if self.stations is not None:
+            object.__setattr__(self, "stations", {str(k): tuple(float(x) for x in v)
+                                                  for k, v in dict(self.stations).items()})
+
+    def snapshot_steps(self, nsteps: int, dt: float) -> np.ndarray:
+        if self.times is not None:
+            for t in self.times:
+                if not 0 <= t <= nsteps * dt * (1 + 1e-12):
+                    raise InputError("record.times", f"must lie in [0, t_end = {nsteps * dt:g}], got {t:g}")
+            return np.unique(np.rint(np.asarray(self.times) / dt).astype(int))
+        every = self.every or max(1, nsteps // 20)
+        steps = np.arange(0, nsteps + 1, every)
+        return steps
+
+    def region_slices(self, grid) -> tuple[slice, slice]:
+        def sl(coord, bounds, field):
+            if bounds is None:
+                return slice(None)
+            lo, hi = bounds
+            idx = np.nonzero((coord >= lo) & (coord <= hi))[0]
+            if idx.size == 0:
+                raise InputError(f"record.region.{field}", f"({lo}, {hi}) holds no grid node")
+            return slice(int(idx[0]), int(idx[-1]) + 1)
+
+        region = self.region or {}
+        s1 = sl(grid.x1, region.get("x1"), "x1")
+        s3 = slice(None) if grid.plane else sl(grid.x3, region.get("x3"), "x3")
+        return s1, s3
+
+    def station_nodes(self, grid) -> dict:
+        out = {}
+        for name, xy in (self.stations or {}).items():
+            x1, x3 = (xy + (0.0,))[:2]
+            if not (0 <= x1 < grid.L1 and (grid.plane or 0 <= x3 < grid.L3)):
+                raise InputError(f"record.stations.{name}", f"({x1}, {x3}) is outside the grid [0, L1) x [0, L3)")
+            out[name] = grid.nearest_node(x1, x3)
+        return out

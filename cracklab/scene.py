@@ -1,0 +1,126 @@
+"""A scene: everything needed to run one simulation, validated at construction."""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import InputError, check_positive
+from .grid import Grid
+from .laws import LAWS, law_parameters
+from .loading import Loading
+from .material import Material
+from .record import Record
+from .stability import beta_max, modes_of
+
+FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized"}
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """Scheme options: ``formulation`` "displacement" (Eq. 32, trapezoid pre-integrated
+    kernel (46), explicit update (37)) or "velocity" (Eq. 33, discretised kernel (45),
+    semi-implicit update (50)); history ``engine``; ``window`` truncates the history at
+    T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
+    its velocity magnitude first exceeds it."""
+
+    formulation: str = "displacement"
+    engine: str = "direct"
+    window: float | None = None
+    rupture_threshold: float = 0.0
+    fft_threads: int = 1
+
+    def __post_init__(self):
+        if self.formulation not in FORMULATIONS:
+            raise InputError("numerics.formulation", f"must be one of {tuple(FORMULATIONS)}, got {self.formulation!r}")
+        if self.window is not None:
+            check_positive("numerics.window", self.window)
+        check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
+
+    @property
+    def convolution(self) -> str:
+        return FORMULATIONS[self.formulation]
+
+
+@dataclass(frozen=True)
+class Scene:
+    material: Material
+    grid: Grid
+    law: object
+    loading: Loading
+    t_end: float
+    beta: float = 0.5
+    record: Record = field(default_factory=Record)
+    numerics: Numerics = field(default_factory=Numerics)
+    units: dict = field(default_factory=lambda: {"length": "1", "time": "1", "stress": "1"})
+    name: str = "scene"
+
+    def __post_init__(self):
+        for name, cls in (("material", Material), ("grid", Grid), ("loading", Loading),
+                          ("record", Record), ("numerics", Numerics)):
+            if not isinstance(getattr(self, name), cls):
+                raise InputError(name, f"must be a cracklab.{cls.__name__}, got {type(getattr(self, name)).__name__}")
+        if type(self.law) not in LAWS.values():
+            raise InputError("law", f"must be one of the laws {sorted(LAWS)}, got {type(self.law).__name__}")
+        object.__setattr__(self, "t_end", check_positive("t_end", self.t_end))
+        object.__setattr__(self, "beta", check_positive("beta", self.beta))
+        self._check_shapes()
+        active = self.components
+        if not active:
+            raise InputError("loading", f"no load on a component the law {self.law.kind!r} acts on "
+                                        f"(law components {self.law.components})")
+        for c in self.loading.loaded():
+            if c not in self.law.components:
+                raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}")
+        bmax = beta_max(self.grid, self.numerics.formulation, self.numerics.convolution, active)
+        if self.beta > bmax:
+            raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.numerics.formulation} scheme "
+                                     f"on this grid (modes {', '.join(modes_of(active, self.grid.plane))}), "
+                                     f"got {self.beta}")
+        self.record.snapshot_steps(self.nsteps, self.dt)
+        self.record.region_slices(self.grid)
+        self.record.station_nodes(self.grid)
+        for f in self.record.fields:
+            if f != "strength" and int(f[-1]) not in active:
+                raise InputError("record.fields", f"{f!r} is not computed: active components are {active}")
+
+    def _check_shapes(self):
+        shape = self.grid.shape
+
+        def check(name, value, boolean=False):
+            if value is None or np.ndim(value) == 0:
+                return
+            arr = np.asarray(value)
+            if arr.shape != shape:
+                raise InputError(name, f"field shape must be (n1, n3) = {shape}, got {arr.shape}")
+            if not boolean and arr.dtype != bool and not np.all(np.isfinite(arr) | (arr == np.inf)):
+                raise InputError(name, "field values must be finite")
+
+        for key, value in law_parameters(self.law).items():
+            if key in ("contact", "speed", "origin"):
+                continue
+            check(f"law.{key}", value, boolean=key in ("bonded", "initial_crack"))
+        for c in (1, 2, 3):
+            check(f"loading.tau0_{c}", self.loading.field(c), boolean=True)
+
+    @property
+    def dt(self) -> float:
+        """Eq. (51): dt = beta min(dx1, dx3) / c_s."""
+        return self.beta * self.grid.dx_min / self.material.cs
+
+    @property
+    def nsteps(self) -> int:
+        return int(np.ceil(self.t_end / self.dt - 1e-9))
+
+    @property
+    def components(self) -> tuple[int, ...]:
+        """Active displacement-discontinuity components: loaded ones the law acts on,
+        plus both shear components in 3D (modes II and III couple there)."""
+        active = set(self.loading.loaded()) & set(self.law.components)
+        if not self.grid.plane and active & {1, 3}:
+            active |= {1, 3}
+        return tuple(sorted(active))
+
+    def replace(self, **changes) -> "Scene":
+        return dataclasses.replace(self, **changes)

@@ -1,0 +1,99 @@
+"""Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
+and the plane test problems used in verification."""
+from __future__ import annotations
+
+import numpy as np
+
+from .grid import Grid
+from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree
+from .loading import Loading, point_load
+from .material import Material
+from .record import Record
+from .scene import Numerics, Scene
+
+UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
+
+
+def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
+    """Lamb's problem (section 3.2): unit square, point load P = 1 at node (n//2, n//2),
+    step in time, traction-free plane without contact constraint."""
+    grid = Grid(n1=n, n3=n, L1=1.0, L3=1.0)
+    load = point_load(grid, 1.0, grid.x1[n // 2], grid.x3[n // 2])
+    return Scene(material=UNIT, grid=grid, law=TractionFree(contact=False), loading=Loading(tau0_2=load),
+                 t_end=t_end, beta=beta, record=record or Record(fields=("delta_2",)),
+                 numerics=numerics or Numerics(), name="lamb")
+
+
+def ellipse_mask(grid, a, b, centre=(0.5, 0.5)):
+    x1, x3 = np.meshgrid(grid.x1, grid.x3, indexing="ij")
+    return ((x1 - centre[0]) / a) ** 2 + ((x3 - centre[1]) / b) ** 2 <= 1.0
+
+
+def elliptical_crack(*, n, a, b, p=1.0, beta=0.5, t_end, record=None, numerics=None):
+    """Suddenly loaded elliptical crack (section 4, Figs. 10-11): unit square, semi-axes
+    a (x1) and b (x3) centred at (0.5, 0.5), faces under pressure p from t = 0; the
+    plane outside the ellipse stays bonded."""
+    grid = Grid(n1=n, n3=n, L1=1.0, L3=1.0)
+    crack = ellipse_mask(grid, a, b)
+    return Scene(material=UNIT, grid=grid, law=TractionFree(contact=True, bonded=~crack),
+                 loading=Loading(tau0_2=np.where(crack, float(p), 0.0)), t_end=t_end, beta=beta,
+                 record=record or Record(fields=("delta_2",)), numerics=numerics or Numerics(),
+                 name="elliptical_crack")
+
+
+def periodic_cracks(*, n, c, p=1.0, mode="I", beta=0.5, t_end, record=None, numerics=None):
+    """Plane (2D) periodic row of cracks of half length c in the unit period, centred
+    at x1 = 0.5, under a suddenly applied uniform load p (opening for mode I, slip for
+    modes II and III); bonded outside the crack."""
+    grid = Grid(n1=n, n3=1, L1=1.0, L3=1.0)
+    crack = (np.abs(grid.x1 - 0.5) <= c)[:, None]
+    comp = {"I": 2, "II": 1, "III": 3}[mode]
+    load = Loading(**{f"tau0_{comp}": np.where(crack, float(p), 0.0)})
+    return Scene(material=UNIT, grid=grid, law=TractionFree(contact=False, bonded=~crack), loading=load,
+                 t_end=t_end, beta=beta, record=record or Record(fields=(f"delta_{comp}",)),
+                 numerics=numerics or Numerics(), name=f"periodic_cracks_{mode}")
+
+
+def kostrov(*, n, speed, dtau=1.0, L=1.0, beta=0.5, t_end, record=None, numerics=None):
+    """Plane mode III crack forced to grow from the line x1 = L/2 at ``speed``
+    (prescribed rupture; stress drop dtau, zero residual strength)."""
+    grid = Grid(n1=n, n3=1, L1=L, L3=1.0)
+    law = PrescribedRupture(speed=speed, origin=(grid.x1[n // 2], 0.0), residual=0.0)
+    centre = {"centre": (grid.x1[n // 2], 0.0)}
+    return Scene(material=UNIT, grid=grid, law=law, loading=Loading(tau0_3=float(dtau)), t_end=t_end,
+                 beta=beta, record=record or Record(fields=("delta_3",), stations=centre),
+                 numerics=numerics or Numerics(), name="kostrov")
+
+
+def tpv3_station_name(strike: int, dip: int) -> str:
+    def fmt(v):
+        return ("-" if v < 0 else "") + f"{abs(v):03d}"
+
+    return f"faultst{fmt(strike)}dp{fmt(dip)}"
+
+
+TPV3_STATIONS = [(s, 0) for s in (-120, -75, -45, 0, 45, 75, 120)] + \
+    [(0, d) for d in (-75, -45, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
+
+
+def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
+    """SCEC TPV3 (see shared/reference/tpv3_mdsbi/README.md): 30 km x 15 km fault
+    centred in a periodic domain, slip-weakening friction, bonded outside the fault;
+    SI units. Records the SCEC on-fault stations and the rupture time (slip rate
+    above 1 mm/s)."""
+    L1, L3 = domain
+    n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
+    mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
+    xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
+    x1, x3 = np.meshgrid(grid.x1 - xc, grid.x3 - zc, indexing="ij")
+    fault = (np.abs(x1) <= 15000.0 + 1e-6) & (np.abs(x3) <= 7500.0 + 1e-6)
+    patch = (np.abs(x1) <= 1500.0 + 1e-6) & (np.abs(x3) <= 1500.0 + 1e-6)
+    tau0 = np.where(patch, 81.6e6, 70.0e6)
+    law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
+    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
+    return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
+                 beta=0.25 if beta is None else beta,
+                 record=record or Record(fields=(), stations=stations),
+                 numerics=numerics or Numerics(rupture_threshold=1e-3),
+                 units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")

@@ -1,0 +1,89 @@
+"""The time stepper: steps (i)-(v) of section 3 for any active set of components."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SimulationError
+from .laws import solve_velocity
+from .response import Response
+from .spectral import Transforms
+
+
+@dataclass
+class State:
+    """Solver state after step n (time t)."""
+
+    n: int
+    t: float
+    delta: dict
+    v: dict
+    tau: dict
+    strength: np.ndarray
+    law_state: dict
+
+
+def steps(scene, response=None):
+    """Generate the State after each step n = 0 .. nsteps.
+
+    Displacement formulation: explicit update (37), delta_n = delta_{n-1} + dt v_{n-1}.
+    Velocity formulation: semi-implicit update (50); the functional is evaluated at
+    delta*_n = delta_{n-1} + dt v_{n-1}/2 and the law at the predictor delta_{n-1} + dt v_{n-1}.
+    """
+    grid, mat, law, load = scene.grid, scene.material, scene.law, scene.loading
+    comps = scene.components
+    dt = scene.dt
+    if response is None:
+        response = Response(mat, grid, dt, comps, formulation=scene.numerics.formulation,
+                            engine=scene.numerics.engine, window=scene.numerics.window,
+                            transforms=Transforms(grid, scene.numerics.fft_threads))
+    eta = {c: mat.eta(c) for c in comps}
+    zero = {c: np.zeros(grid.shape) for c in comps}
+    delta = {c: zero[c].copy() for c in comps}
+    v = {c: zero[c].copy() for c in comps}
+    lstate = law.init_state(grid)
+    velocity = scene.numerics.formulation == "velocity"
+    area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
+    width = grid.L3 if not grid.plane else 1.0
+    l0 = None
+    for n in range(scene.nsteps + 1):
+        t = n * dt
+        if velocity:
+            dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
+            f = response.functional(dstar, v)
+            trial = {c: delta[c] + dt * v[c] for c in comps}
+        else:
+            if n > 0:
+                for c in comps:
+                    delta[c] += dt * v[c]
+            f = response.functional(delta)
+            trial = delta
+        law.update(lstate, trial, dt, v if n > 0 else None, t)
+        length = None
+        if load.constant_K:
+            failed = law.failed(lstate)
+            length = float(np.count_nonzero(failed)) * area / width if failed is not None else None
+            if l0 is None:
+                l0 = load.l0 or length
+            length = length or l0
+        tau0 = load.at(t, comps, length)
+        strength = law.strength(lstate, t, grid)
+        tau_star = {c: tau0[c] + f[c] for c in comps}
+        v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
+        if velocity:
+            for c in comps:
+                delta[c] += 0.5 * dt * (v[c] + v_new[c])
+        v = v_new
+        check_finite(n, t, v, grid)
+        yield State(n, t, delta if not velocity else delta, v, tau,
+                    np.broadcast_to(strength, grid.shape), lstate)
+
+
+def check_finite(n, t, v, grid):
+    for c, vc in v.items():
+        if not np.isfinite(vc).all():
+            i, k = np.unravel_index(np.argmax(~np.isfinite(vc)), vc.shape)
+            raise SimulationError(
+                f"non-finite v_{c} at step {n} (t = {t:g}) at node ({i}, {k}), "
+                f"x1 = {grid.x1[i]:g}, x3 = {grid.x3[k]:g}; the run was stopped")

@@ -1,0 +1,69 @@
+import numpy as np
+import pytest
+
+from cracklab import Grid, InputError, Material
+from cracklab.grid import is_fast_size
+from cracklab.spectral import Transforms
+
+
+def test_material_speeds():
+    m = Material(mu=2.0, cs=3.0, nu=0.25)
+    assert m.a == pytest.approx(np.sqrt(3.0), rel=1e-15)
+    assert m.cd == pytest.approx(3.0 * np.sqrt(3.0))
+    assert m.rho == pytest.approx(2.0 / 9.0)
+    assert m.cR / m.cs == pytest.approx(0.9194017, abs=1e-6)
+    assert m.eta(2) == pytest.approx(2.0 * np.sqrt(3) / 6.0)
+    assert m.eta(1) == m.eta(3) == pytest.approx(2.0 / 6.0)
+
+
+@pytest.mark.parametrize("kwargs, field", [
+    (dict(mu=-1, cs=1, nu=0.25), "material.mu"),
+    (dict(mu=1, cs=0, nu=0.25), "material.cs"),
+    (dict(mu=1, cs=1, nu=0.5), "material.nu"),
+])
+def test_material_rejects(kwargs, field):
+    with pytest.raises(InputError, match=field):
+        Material(**kwargs)
+
+
+def test_fast_sizes():
+    assert [n for n in range(2, 40) if is_fast_size(n) and n % 2 == 0] == \
+        [2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 24, 28, 30, 32, 36]
+
+
+@pytest.mark.parametrize("kwargs, field, text", [
+    (dict(n1=100, n3=22, L1=1, L3=1), "grid.n3", "fast FFT size"),
+    (dict(n1=101, n3=64, L1=1, L3=1), "grid.n1", "fast FFT size"),
+    (dict(n1=-8, n3=64, L1=1, L3=1), "grid.n1", ">= 1"),
+    (dict(n1=64, n3=64, L1=-1, L3=1), "grid.L1", "> 0"),
+    (dict(n1=64.0, n3=64, L1=1, L3=1), "grid.n1", "integer"),
+])
+def test_grid_rejects(kwargs, field, text):
+    with pytest.raises(InputError, match=field) as err:
+        Grid(**kwargs)
+    assert text in str(err.value)
+
+
+def test_grid_nodes_and_wavenumbers():
+    g = Grid(n1=16, n3=8, L1=2.0, L3=1.0)
+    assert g.dx1 == 0.125 and g.dx3 == 0.125
+    assert np.allclose(g.x1, np.arange(16) * 0.125)
+    k, m = g.wavenumbers()
+    assert k.shape == g.spectral_shape == (9, 8)
+    assert k[1, 0] == pytest.approx(2 * np.pi / 2.0)
+    assert m[0, 1] == pytest.approx(2 * np.pi / 1.0)
+    assert g.q_max() == pytest.approx(np.hypot(np.pi / 0.125, np.pi / 0.125))
+
+
+@pytest.mark.parametrize("shape", [(16, 8), (32, 1)])
+def test_transforms_round_trip_and_derivative(shape):
+    g = Grid(n1=shape[0], n3=shape[1], L1=1.0, L3=1.0)
+    f = Transforms(g)
+    x1, x3 = np.meshgrid(g.x1, g.x3, indexing="ij")
+    field = np.sin(2 * np.pi * 3 * x1) + (np.cos(2 * np.pi * 2 * x3) if shape[1] > 1 else 0)
+    X = f.forward(field)
+    assert X.shape == g.spectral_shape
+    assert np.allclose(f.inverse(X), field, atol=1e-12)
+    k, _ = g.wavenumbers()
+    d1 = f.inverse(1j * k * X)
+    assert np.allclose(d1, 2 * np.pi * 3 * np.cos(2 * np.pi * 3 * x1), atol=1e-9)

@@ -1,0 +1,23 @@
+"""Kostrov's self-similar mode III crack grown at constant speed (plane problem)."""
+import numpy as np
+import pytest
+from scipy.special import ellipe
+
+from cracklab import simulate, stations
+from cracklab.scenes import kostrov
+
+
+@pytest.mark.parametrize("v", [0.5, 0.7, 0.9])
+def test_kostrov_centre_slip(v):
+    n = 256
+    dx = 1.0 / n
+    t_end = 30 * dx / v  # crack spans 60 cells at the end
+    ds = simulate(kostrov(n=n, speed=v, t_end=t_end))
+    st = stations(ds).sel(station="centre")
+    t = st.t.values
+    k = np.sqrt(1 - v**2)
+    exact = 2.0 / ellipe(k**2) * v * t
+    span = 2 * v * t / dx
+    sel = span >= 20
+    err = np.max(np.abs(st.delta_3.values[sel] - exact[sel]) / exact[sel])
+    assert err < 0.02, f"v = {v}: max relative error {err:.4f}"
