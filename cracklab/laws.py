@@ -47,7 +47,7 @@ class TractionFree:
     def init_state(self, grid):
         return {}
 
-    def update(self, state, delta, dt, v_prev, t):
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         pass
 
     def strength(self, state, t, grid):
@@ -87,7 +87,7 @@ class LinearCohesive:
             dmax = np.where(self.initial_crack, np.inf, 0.0)
         return {"delta_max": dmax}
 
-    def update(self, state, delta, dt, v_prev, t):
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         np.maximum(state["delta_max"], delta[2], out=state["delta_max"])
 
     def strength(self, state, t, grid):
@@ -127,7 +127,7 @@ class SlipWeakening:
     def init_state(self, grid):
         return {"slip": np.zeros(grid.shape)}
 
-    def update(self, state, delta, dt, v_prev, t):
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         if v_prev is not None:
             speed = np.sqrt(sum(v_prev[c] ** 2 for c in v_prev if c in SHEAR))
             state["slip"] += dt * speed
@@ -145,16 +145,20 @@ class SlipWeakening:
 
 @dataclass(frozen=True)
 class PrescribedRupture:
-    """Strength drops from ``strength`` to ``residual`` once t > r / speed (Kostrov tests).
+    """Strength drops from ``strength_before`` to ``residual`` once t > r / speed (Kostrov tests).
 
     r is the distance to the nucleation point ``origin`` = (x1, x3) in 3D, or to the
-    line x1 = origin[0] in the plane problem.
+    line x1 = origin[0] in the plane problem. With ``weakening_time`` t_w > 0 the drop
+    is linear in time over [r/speed - t_w/2, r/speed + t_w/2], starting from the
+    traction the point carried when the drop began (a time-weakening release that
+    avoids the pulses of cell-by-cell jumps; t_w = dx/speed is one cell).
     """
 
     speed: float
     origin: tuple = (0.0, 0.0)
     residual: float | np.ndarray = 0.0
     strength_before: float | np.ndarray = np.inf
+    weakening_time: float = 0.0
     bonded: np.ndarray | None = None
     kind = "prescribed_rupture"
     components = ALL
@@ -164,22 +168,39 @@ class PrescribedRupture:
         _check(self, "speed")
         _check(self, "residual", allow_equal=True)
         _check(self, "strength_before", allow_equal=True)
+        _check(self, "weakening_time", allow_equal=True)
 
     def init_state(self, grid):
         x1, x3 = np.meshgrid(grid.x1, grid.x3, indexing="ij")
         r = np.abs(x1 - self.origin[0])
         if not grid.plane:
             r = np.hypot(r, x3 - self.origin[1])
-        return {"t_rupture": r / self.speed}
+        start = r / self.speed - 0.5 * self.weakening_time
+        return {"t_start": start, "s_start": np.full(grid.shape, np.nan), "_t": -np.inf}
 
-    def update(self, state, delta, dt, v_prev, t):
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         state["_t"] = t
+        new = (t >= state["t_start"]) & np.isnan(state["s_start"])
+        if new.any():
+            if tau_prev:
+                level = np.sqrt(sum(tau_prev[c] ** 2 for c in tau_prev))
+            else:
+                level = np.zeros(state["s_start"].shape)
+            state["s_start"][new] = np.maximum(level[new], self.residual if np.ndim(self.residual) == 0
+                                               else np.asarray(self.residual)[new])
 
     def strength(self, state, t, grid):
-        return np.where(t >= state["t_rupture"], self.residual, self.strength_before)
+        started = t >= state["t_start"]
+        if self.weakening_time > 0:
+            frac = np.clip(1.0 - (t - state["t_start"]) / self.weakening_time, 0.0, 1.0)
+            s0 = np.where(started, state["s_start"], 0.0)
+            dropping = self.residual + (s0 - self.residual) * frac
+        else:
+            dropping = self.residual
+        return np.where(started, dropping, self.strength_before)
 
     def broken(self, state):
-        return state.get("_t", 0.0) >= state["t_rupture"]
+        return state["_t"] >= state["t_start"]
 
     def failed(self, state):
         return self.broken(state)

@@ -1,7 +1,8 @@
 """Loading: tau0_j(x1, x3) times a time function, Eq. (3).
 
 ``tau0`` is the traction the plane would carry if it were welded. Time functions:
-"step" (H(t)) and "ramp" (min(t / ramp_time, 1)). With ``constant_K`` the load is
+"step" (H(t)), "ramp" (min(t / ramp_time, 1)) and "smooth" (the C1 ramp 3 s^2 - 2 s^3,
+s = min(t / ramp_time, 1), which starts and ends without a jump in loading rate). With ``constant_K`` the load is
 scaled by sqrt(l0 / l(t)), l the mean crack length (section 4), so that the nominal
 stress intensity factor stays constant.
 """
@@ -13,7 +14,7 @@ import numpy as np
 
 from .errors import InputError
 
-TIME_FUNCTIONS = ("step", "ramp")
+TIME_FUNCTIONS = ("step", "ramp", "smooth")
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,7 @@ class Loading:
     def __post_init__(self):
         if self.time not in TIME_FUNCTIONS:
             raise InputError("loading.time", f"must be one of {TIME_FUNCTIONS}, got {self.time!r}")
-        if self.time == "ramp" and not float(self.ramp_time) > 0:
+        if self.time != "step" and not float(self.ramp_time) > 0:
             raise InputError("loading.ramp_time", f"must be > 0 for a ramp, got {self.ramp_time!r}")
         for c in (1, 2, 3):
             value = self.field(c)
@@ -44,7 +45,8 @@ class Loading:
         return tuple(c for c in (1, 2, 3) if np.any(np.asarray(self.field(c)) != 0))
 
     def factor(self, t: float, crack_length: float | None = None) -> float:
-        g = 1.0 if self.time == "step" else min(t / self.ramp_time, 1.0)
+        s = 1.0 if self.time == "step" else min(max(t, 0.0) / self.ramp_time, 1.0)
+        g = s * s * (3.0 - 2.0 * s) if self.time == "smooth" else s
         if t < 0:
             g = 0.0
         if self.constant_K and crack_length:

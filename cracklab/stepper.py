@@ -47,6 +47,7 @@ def steps(scene, response=None):
     area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
     width = grid.L3 if not grid.plane else 1.0
     l0 = None
+    tau = None
     for n in range(scene.nsteps + 1):
         t = n * dt
         if velocity:
@@ -59,7 +60,7 @@ def steps(scene, response=None):
                     delta[c] += dt * v[c]
             f = response.functional(delta)
             trial = delta
-        law.update(lstate, trial, dt, v if n > 0 else None, t)
+        law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
         length = None
         if load.constant_K:
             failed = law.failed(lstate)
