@@ -61,8 +61,12 @@ def scene_from_data(data: dict, arrays: dict | None = None):
             return np.asarray(arrays[v["array"]])
         if isinstance(v, dict) and set(v) == {"float"}:
             return float(v["float"])
-        if isinstance(v, list) and section == "record" and key == "region":
-            return v
+        if isinstance(v, list) and section in ("law", "loading") and key != "origin":
+            try:
+                arr = np.asarray(v, dtype=bool if key in ("bonded", "initial_crack") else float)
+            except (TypeError, ValueError):
+                raise InputError(f"{section}.{key}", "must be a number or an (n1, n3) array") from None
+            return arr
         return v
 
     def build(section, cls, d):

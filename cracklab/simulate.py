@@ -119,7 +119,7 @@ class _Recorder:
                                  {"long_name": "first time the point failed", "units": scene.units["time"]})
         if self.nodes:
             extra = extra.assign_coords(
-                station=("station", list(self.nodes)),
+                station=("station", np.array(list(self.nodes), dtype=object)),
                 station_x1=("station", [scene.grid.x1[i] for i, _ in self.nodes.values()],
                             {"units": scene.units["length"], "long_name": "station x1"}),
                 station_x3=("station", [scene.grid.x3[k] for _, k in self.nodes.values()],
@@ -130,6 +130,7 @@ class _Recorder:
         _, arrays = scene_to_json(scene)
         for name, arr in arrays.items():
             extra[name] = (("input_x1", "input_x3"), np.asarray(arr))
+        extra.attrs = self.global_attrs()
         if self.store is not None:
             if not self.written:
                 xr.Dataset(coords={"t": self._coords(None)["t"]}, attrs=self.global_attrs()).to_zarr(

@@ -72,7 +72,8 @@ def steps(scene, response=None):
         strength = law.strength(lstate, t, grid)
         tau_star = {c: tau0[c] + f[c] for c in comps}
         v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
-        if velocity:
+        if velocity and n > 0:
+            # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
             for c in comps:
                 delta[c] += 0.5 * dt * (v[c] + v_new[c])
         v = v_new

@@ -1,0 +1,78 @@
+"""The command line: run a TOML scene, rerun from its output store, bench."""
+import json
+
+import numpy as np
+import xarray as xr
+from click.testing import CliRunner
+
+from cracklab.cli import main
+
+SCENE = """
+t_end = 0.05
+beta = 0.5
+name = "cli-test"
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 16
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "linear_cohesive"
+tau_c = 1.0
+delta_c = 0.01
+initial_crack = [%s]
+
+[loading]
+tau0_2 = 1.2
+
+[record]
+fields = ["delta_2", "v_2"]
+every = 2
+"""
+
+
+def scene_toml(tmp_path):
+    rows = ["[" + ", ".join("true" if 6 <= i <= 9 else "false" for _ in range(16)) + "]" for i in range(16)]
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE % ", ".join(rows))
+    return path
+
+
+def test_run_toml_then_rerun_from_store(tmp_path):
+    runner = CliRunner()
+    first = tmp_path / "a.zarr"
+    res = runner.invoke(main, ["run", str(scene_toml(tmp_path)), "-o", str(first)])
+    assert res.exit_code == 0, res.output
+    a = xr.open_zarr(first, consolidated=False)
+    assert float(a.delta_2.isel(t=-1).max()) > 0
+    second = tmp_path / "b.zarr"
+    res = runner.invoke(main, ["run", str(first), "-o", str(second)])
+    assert res.exit_code == 0, res.output
+    b = xr.open_zarr(second, consolidated=False)
+    for name in ("delta_2", "v_2", "rupture_time"):
+        np.testing.assert_allclose(b[name].values, a[name].values, rtol=1e-12, atol=1e-15, equal_nan=True)
+
+
+def test_run_rejects_unknown_key(tmp_path):
+    path = scene_toml(tmp_path)
+    path.write_text(path.read_text().replace("[grid]\n", "[grid]\nspacing = 3\n"))
+    res = CliRunner().invoke(main, ["run", str(path), "-o", str(tmp_path / "x.zarr")])
+    assert res.exit_code != 0
+    assert "grid.spacing: unknown key" in res.output
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_bench_json():
+    res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "32", "--steps", "20", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    for key in ("ms_per_step", "fft_pair_ms", "peak_rss_mb", "engine"):
+        assert key in out
+    assert out["ms_per_step"] > 0 and out["fft_pair_ms"] > 0
