@@ -32,6 +32,18 @@ def _attrs(scene, name):
     return {"long_name": long_name, "units": _units(scene, kind)}
 
 
+INPUT_KINDS = {"tau0_1": "stress", "tau0_2": "stress", "tau0_3": "stress", "tau_c": "stress",
+               "sigma_n": "stress", "residual": "stress", "strength_before": "stress",
+               "delta_c": "length", "D_c": "length"}
+
+
+def _input_attrs(scene, name):
+    """Attrs of a scene input field stored as ``input_<section>_<key>``."""
+    section, key = name[len("input_"):].split("_", 1)
+    kind = INPUT_KINDS.get(key)
+    return {"long_name": f"scene input {section}.{key}", "units": scene.units[kind] if kind else "1"}
+
+
 def _field(state, name):
     if name == "strength":
         return state.strength
@@ -129,7 +141,7 @@ class _Recorder:
                 extra[f"station_{f}"] = (("station", "t_station"), self.series[f][:last_n + 1].T, _attrs(scene, f))
         _, arrays = scene_to_json(scene)
         for name, arr in arrays.items():
-            extra[name] = (("input_x1", "input_x3"), np.asarray(arr))
+            extra[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(scene, name))
         extra.attrs = self.global_attrs()
         if self.store is not None:
             if not self.written:

@@ -1,6 +1,7 @@
 """The time stepper: steps (i)-(v) of section 3 for any active set of components."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,6 +68,9 @@ def steps(scene, response=None):
             length = float(np.count_nonzero(failed)) * area / width if failed is not None else None
             if l0 is None:
                 l0 = load.l0 or length
+                if load.l0 is None:
+                    # Loading.factor scales by sqrt(l0 / l): give it the initial length
+                    load = dataclasses.replace(load, l0=l0)
             length = length or l0
         tau0 = load.at(t, comps, length)
         strength = law.strength(lstate, t, grid)
