@@ -13,6 +13,11 @@ class DirectEngine:
     Eqs. (45)-(47) for the given kernel, rule and formulation, shifted by ``lag``
     (lag = 1 gives sum_{j>=1} w_j x_{n-j} when x_{n-1} is pushed at step n).
     ``window`` truncates the history at T = q c_s t <= window (None: untruncated).
+
+    Storage: a doubled ring buffer written at decreasing positions, so that the last
+    L values, newest first, are one contiguous slice; complex values are read as
+    interleaved (re, im) floats against weights stored twice per mode, so the sum is a
+    single contiguous reduction.
     """
 
     name = "direct"
@@ -32,10 +37,9 @@ class DirectEngine:
         if window is not None and positive.size:
             self.cap = int(np.ceil(window / positive.min())) + 1
         m = self.gamma.size
-        self._w = np.empty((0, m))
-        cap = self.cap or self.chunk
-        self._buf = np.zeros((2 * cap, m), dtype=complex)
-        self._bufcap = cap
+        self._w2 = np.empty((0, 2 * m))
+        self._bufcap = self.cap or self.chunk
+        self._buf = np.zeros((2 * self._bufcap, m), dtype=complex)
         self.n = 0  # number of values pushed
 
     def _weights(self, j0: int, j1: int) -> np.ndarray:
@@ -47,14 +51,19 @@ class DirectEngine:
             w = np.where(j * self._ug[None, :] <= self.window, w, 0.0)
         return np.ascontiguousarray(w[:, self._inv], dtype=float)
 
+    def _slot(self, i: int, cap: int) -> int:
+        """Position of x_i in a buffer of capacity cap (positions decrease with i)."""
+        return (-i) % cap
+
     def _grow(self):
         old, n = self._bufcap, self.n
         new = 2 * old
         buf = np.zeros((2 * new, self._buf.shape[1]), dtype=complex)
-        i = np.arange(max(0, n - old), n)
-        vals = self._buf[i % old]
-        buf[i % new] = vals
-        buf[i % new + new] = vals
+        for i in range(max(0, n - old), n):
+            v = self._buf[self._slot(i, old)]
+            p = self._slot(i, new)
+            buf[p] = v
+            buf[p + new] = v
         self._buf, self._bufcap = buf, new
 
     def push(self, x: np.ndarray) -> np.ndarray:
@@ -65,16 +74,16 @@ class DirectEngine:
         if self.cap is None and length > self._bufcap:
             self._grow()
         cap = self._bufcap
-        while self._w.shape[0] < length:
-            j0 = self._w.shape[0]
-            self._w = np.concatenate([self._w, self._weights(j0, j0 + self.chunk)])
-        p = n % cap
+        if self._w2.shape[0] < length:
+            j0 = self._w2.shape[0]
+            j1 = max(length, j0 + self.chunk) if self.cap is None else self.cap
+            w = self._weights(j0, j1)
+            self._w2 = np.concatenate([self._w2, np.repeat(w, 2, axis=1)])
+        p = self._slot(n, cap)
         self._buf[p] = x
         self._buf[p + cap] = x
-        # newest first: buf[p + cap], buf[p + cap - 1], ...
-        hist = self._buf[p + cap - length + 1:p + cap + 1][::-1]
-        w = self._w[:length]
-        s = np.einsum("jm,jm->m", w, hist.real) + 1j * np.einsum("jm,jm->m", w, hist.imag)
+        hist = self._buf[p:p + length].view(float)       # newest first, (re, im) interleaved
+        s = np.einsum("jm,jm->m", self._w2[:length], hist).view(complex)
         self.n = n + 1
         return s.reshape(self.shape)
 
