@@ -1,8 +1,32 @@
-"""Scene <-> plain data (JSON-able dict plus named arrays), for attrs and stores."""
+"""Scenes as data: plain dicts, TOML and xarray Datasets, all lossless.
+
+Three representations, one strict decoder (``scene_from_data``):
+
+* **plain data** (``scene_to_data``): a JSON-able nested dict plus ``{name: array}``
+  for the spatial fields; array-valued parameters appear as ``{"array": name}`` and
+  non-finite floats as ``{"float": "inf"}``. A run's output stores it as the JSON
+  attr ``scene`` plus ``input_<section>_<key>`` variables (``cracklab.scene_of``).
+* **TOML** (``scene_to_toml`` / ``scene_from_toml``): the same nested dict with
+  the fields inline as nested lists; floats are written repr-exact, ``inf`` as TOML
+  ``inf``.
+* **xarray** (``scene_to_dataset`` / ``scene_from_dataset``): every scalar parameter
+  is one global attr named ``<section>.<key>`` (``material.mu``, ``law.kind``,
+  ``record.stations.<name>``, ``units.length``; the top-level ones are ``t_end``,
+  ``beta`` and ``scene``, the scene's name); every array-valued parameter is a data
+  variable ``<section>_<key>`` on dims (x1, x3) with the grid's coordinates. See
+  docs/scenes.md for the full layout.
+
+Every path validates at the boundary: unknown keys at any level, a string where a
+number goes, a float grid size, a list of numbers where booleans go, ... each end in
+one ``InputError`` naming the field, before any work starts; the ranges are checked
+by the dataclasses themselves (``Scene`` and its parts).
+"""
 from __future__ import annotations
 
 import dataclasses
 import json
+import math
+import numbers
 
 import numpy as np
 
@@ -14,109 +38,475 @@ from .material import Material
 from .record import Record
 
 SECTIONS = ("material", "grid", "law", "loading", "record", "numerics")
+TOP = ("t_end", "beta", "units", "name")
+UNIT_KEYS = ("length", "time", "stress")
+DEFAULT_UNITS = {"length": "1", "time": "1", "stress": "1"}
+MASKS = ("bonded", "initial_crack")      # boolean (n1, n3) law parameters
+
+# kinds of values, decided from the dataclass annotations (overridable per field)
+_BASE_KINDS = {"float": "number", "int": "integer", "bool": "boolean", "str": "string",
+               "tuple": "numbers", "dict": "any"}
+_OVERRIDES = {
+    ("record", "fields"): "strings",
+    ("record", "times"): "numbers",
+    ("record", "region"): "region",
+    ("record", "stations"): "stations",
+}
+_EXPECT = {
+    "number": "a number",
+    "integer": "an integer",
+    "boolean": "a boolean (true or false)",
+    "string": "a string",
+    "numbers": "a list of numbers",
+    "strings": "a list of strings",
+    "field": "a number or an (n1, n3) array of numbers",
+    "mask": "a boolean or an (n1, n3) array of booleans (true/false)",
+}
 
 
-def scene_to_data(scene) -> tuple[dict, dict]:
-    """Split a scene into a JSON-able dict and {name: array} for its spatial fields."""
-    arrays = {}
+def _classes():
+    from .scene import Numerics
 
-    def plain(section, obj):
-        out = {}
+    return {"material": Material, "grid": Grid, "loading": Loading, "record": Record,
+            "numerics": Numerics}
+
+
+def _kind(section: str, f: dataclasses.Field) -> tuple[str, bool]:
+    """(kind, optional) of one dataclass field."""
+    ann = str(f.type).replace(" ", "")
+    optional = "None" in ann.split("|")
+    if (section, f.name) in _OVERRIDES:
+        return _OVERRIDES[(section, f.name)], optional
+    if section == "law" and f.name in MASKS:
+        return "mask", True
+    if "ndarray" in ann:
+        return "field", optional
+    base = "|".join(p for p in ann.split("|") if p != "None")
+    return _BASE_KINDS.get(base, "any"), optional
+
+
+def _schema(section: str, cls) -> dict:
+    return {f.name: _kind(section, f) for f in dataclasses.fields(cls)}
+
+
+# ---------------------------------------------------------------------------- encode
+def _plain(value):
+    """numpy scalars -> Python scalars, tuples -> lists (recursively)."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (tuple, list)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    return value
+
+
+def _items(scene):
+    """(section, key, value) of every parameter of the scene's parts."""
+    for section in SECTIONS:
+        obj = getattr(scene, section)
         items = law_parameters(obj) if section == "law" else {f.name: getattr(obj, f.name)
                                                                for f in dataclasses.fields(obj)}
         for key, value in items.items():
-            if isinstance(value, np.ndarray) and value.ndim > 0:
-                name = f"input_{section}_{key}"
-                arrays[name] = value
-                out[key] = {"array": name}
-            elif isinstance(value, np.generic):
-                out[key] = value.item()
-            elif isinstance(value, float) and not np.isfinite(value):
-                out[key] = {"float": repr(value)}
-            elif isinstance(value, tuple):
-                out[key] = list(value)
-            else:
-                out[key] = value
-        return out
+            yield section, key, value
 
-    data = {s: plain(s, getattr(scene, s)) for s in SECTIONS}
-    data["law"] = {"kind": scene.law.kind, **data["law"]}
-    data.update(t_end=scene.t_end, beta=scene.beta, units=dict(scene.units), name=scene.name)
+
+def _is_array(value) -> bool:
+    return isinstance(value, np.ndarray) and value.ndim > 0
+
+
+def scene_to_data(scene) -> tuple[dict, dict]:
+    """Split a scene into a JSON-able dict and {name: array} for its spatial fields.
+
+    Array-valued parameters appear in the dict as {"array": "input_<section>_<key>"},
+    non-finite floats as {"float": "inf"}, None values are left out."""
+    arrays = {}
+    data = {s: {} for s in SECTIONS}
+    data["law"]["kind"] = scene.law.kind
+    for section, key, value in _items(scene):
+        if value is None:
+            continue
+        if _is_array(value):
+            name = f"input_{section}_{key}"
+            arrays[name] = value
+            data[section][key] = {"array": name}
+            continue
+        value = _plain(value)
+        if isinstance(value, float) and not math.isfinite(value):
+            value = {"float": repr(value)}
+        data[section][key] = value
+    data.update(t_end=_plain(scene.t_end), beta=_plain(scene.beta), units=dict(scene.units),
+                name=scene.name)
     return data, arrays
 
 
+def scene_to_json(scene) -> tuple[str, dict]:
+    data, arrays = scene_to_data(scene)
+    return json.dumps(data, allow_nan=False), arrays
+
+
+def scene_to_toml(scene) -> str:
+    """The scene as TOML text: sections as tables, fields as nested lists, floats
+    repr-exact (TOML reads them back bit for bit), inf as TOML ``inf``."""
+    import tomli_w
+
+    data = {"name": scene.name, "t_end": _plain(scene.t_end), "beta": _plain(scene.beta),
+            "units": dict(scene.units)}
+    for section in SECTIONS:
+        data[section] = {"kind": scene.law.kind} if section == "law" else {}
+    for section, key, value in _items(scene):
+        if value is None:
+            continue
+        data[section][key] = np.asarray(value).tolist() if _is_array(value) else _plain(value)
+    return tomli_w.dumps(data)
+
+
+def scene_from_toml(text: str):
+    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``."""
+    import tomllib
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError("toml", f"not valid TOML: {exc}") from None
+    return scene_from_data(data)
+
+
+def _field_attrs(scene, section, key):
+    kinds = {"tau0_1": "stress", "tau0_2": "stress", "tau0_3": "stress", "tau_c": "stress",
+             "sigma_n": "stress", "residual": "stress", "strength_before": "stress",
+             "delta_c": "length", "D_c": "length"}
+    kind = kinds.get(key)
+    return {"long_name": f"scene parameter {section}.{key}",
+            "units": scene.units.get(kind, "1") if kind else "1"}
+
+
+def scene_attrs(scene) -> dict:
+    """The scene's scalar parameters as flat attrs ``<section>.<key>`` (see module doc)."""
+    attrs = {"scene": scene.name, "t_end": _plain(scene.t_end), "beta": _plain(scene.beta)}
+    for k, v in scene.units.items():
+        attrs[f"units.{k}"] = v
+    attrs["law.kind"] = scene.law.kind
+    for section, key, value in _items(scene):
+        if value is None or _is_array(value):
+            continue
+        value = _plain(value)
+        if isinstance(value, bool):
+            value = "true" if value else "false"     # netCDF attrs have no booleans
+        if (section, key) == ("record", "fields"):
+            value = ",".join(value)                  # netCDF-3 attrs have no string lists
+        if isinstance(value, dict):
+            if not value:
+                attrs[f"{section}.{key}"] = []
+            for name, v in value.items():
+                attrs[f"{section}.{key}.{name}"] = v
+        else:
+            attrs[f"{section}.{key}"] = value
+    return attrs
+
+
+def scene_to_dataset(scene):
+    """The scene as an xarray Dataset: scalar parameters as flat global attrs
+    (``material.mu``, ``law.kind``, ...; booleans as the strings "true"/"false",
+    ``record.fields`` as one comma-separated string),
+    array-valued parameters as variables ``<section>_<key>`` on (x1, x3) with the
+    grid's coordinates. Lossless in memory and through Zarr or netCDF."""
+    import xarray as xr
+
+    grid, length = scene.grid, scene.units.get("length", "1")
+    coords = {
+        "x1": ("x1", grid.x1, {"units": length, "long_name": "distance along x1", "axis": "X"}),
+        "x3": ("x3", grid.x3, {"units": length, "long_name": "distance along x3", "axis": "Y"}),
+    }
+    ds = xr.Dataset(coords=coords)
+    for section, key, value in _items(scene):
+        if _is_array(value):
+            ds[f"{section}_{key}"] = (("x1", "x3"), value, _field_attrs(scene, section, key))
+    ds.attrs = scene_attrs(scene)
+    return ds
+
+
+# ---------------------------------------------------------------------------- decode
+def _fail(path, kind, value):
+    shown = repr(value) if not isinstance(value, (list, np.ndarray)) else f"a {type(value).__name__}"
+    raise InputError(path, f"must be {_EXPECT.get(kind, kind)}, got {shown}")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+
+
+def _coerce(path, kind, value, arrays):
+    """Check the type of one value and bring it into the form the dataclass takes."""
+    if isinstance(value, dict) and set(value) == {"array"}:
+        name = value["array"]
+        if name not in arrays:
+            raise InputError(path, f"refers to the array {name!r}, which is not given")
+        value = np.asarray(arrays[name])
+    elif isinstance(value, dict) and set(value) == {"float"}:
+        try:
+            value = float(value["float"])
+        except (TypeError, ValueError):
+            raise InputError(path, f"must be a number, got {value['float']!r}") from None
+    if kind == "number":
+        if not _is_number(value):
+            _fail(path, kind, value)
+        return value.item() if isinstance(value, np.generic) else value
+    if kind == "integer":
+        if not isinstance(value, (int, np.integer)) or isinstance(value, (bool, np.bool_)):
+            _fail(path, kind, value)
+        return int(value)
+    if kind == "boolean":
+        if not isinstance(value, (bool, np.bool_)):
+            _fail(path, kind, value)
+        return bool(value)
+    if kind == "string":
+        if not isinstance(value, str):
+            _fail(path, kind, value)
+        return value
+    if kind == "strings":
+        if isinstance(value, str):
+            return (value,)
+        if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+            _fail(path, kind, value)
+        return tuple(value)
+    if kind == "numbers":
+        if not isinstance(value, (list, tuple, np.ndarray)) or not all(_is_number(v) for v in value):
+            _fail(path, kind, value)
+        return tuple(v.item() if isinstance(v, np.generic) else v for v in value)
+    if kind in ("field", "mask"):
+        if kind == "field" and _is_number(value):
+            return value.item() if isinstance(value, np.generic) else value
+        if kind == "mask" and isinstance(value, (bool, np.bool_)):
+            return bool(value)
+        if isinstance(value, (list, tuple, np.ndarray)):
+            try:
+                arr = np.array(value)
+            except ValueError:
+                arr = None
+            if arr is not None and arr.dtype != object and arr.size > 0:
+                ok = arr.dtype.kind in "fiu" if kind == "field" else arr.dtype == bool
+                if ok:
+                    return arr.astype(float) if arr.dtype.kind in "iu" else arr
+        _fail(path, kind, value)
+    if kind == "region":
+        if not isinstance(value, dict):
+            raise InputError(path, "must be a table {x1 = [lo, hi], x3 = [lo, hi]}")
+        out = {}
+        for key, bounds in value.items():
+            if key not in ("x1", "x3"):
+                raise InputError(f"{path}.{key}", "unknown key; accepted: x1, x3")
+            b = _coerce(f"{path}.{key}", "numbers", bounds, arrays)
+            if len(b) != 2 or not b[0] <= b[1]:
+                raise InputError(f"{path}.{key}", f"must be [lo, hi] with lo <= hi, got {list(b)}")
+            out[key] = b
+        return out
+    if kind == "stations":
+        if not isinstance(value, dict):
+            raise InputError(path, "must be a table {name = [x1, x3]}")
+        out = {}
+        for name, xy in value.items():
+            p = _coerce(f"{path}.{name}", "numbers", xy, arrays)
+            if len(p) not in (1, 2):
+                raise InputError(f"{path}.{name}", f"must be [x1, x3] (or [x1] in 2D), got {list(p)}")
+            out[str(name)] = p
+        return out
+    return value
+
+
+def _build(section, cls, d, arrays, schema=None):
+    if d is None:
+        d = {}
+    if not isinstance(d, dict):
+        raise InputError(section, f"must be a table of parameters, got {d!r}")
+    schema = schema or _schema(section, cls)
+    kwargs = {}
+    for key, value in d.items():
+        if key not in schema:
+            raise InputError(f"{section}.{key}", f"unknown key; accepted: {', '.join(sorted(schema))}")
+        kind, optional = schema[key]
+        if value is None:
+            if not optional:
+                raise InputError(f"{section}.{key}", f"must be {_EXPECT.get(kind, kind)}, got None")
+            kwargs[key] = None
+            continue
+        kwargs[key] = _coerce(f"{section}.{key}", kind, value, arrays)
+    missing = [f.name for f in dataclasses.fields(cls)
+               if f.name not in kwargs and f.default is dataclasses.MISSING
+               and f.default_factory is dataclasses.MISSING]
+    if missing:
+        raise InputError(f"{section}.{missing[0]}", "is required")
+    try:
+        return cls(**kwargs)
+    except TypeError as exc:
+        raise InputError(section, str(exc)) from None
+
+
 def scene_from_data(data: dict, arrays: dict | None = None):
-    """Inverse of scene_to_data; unknown keys raise InputError naming them."""
-    from .scene import Numerics, Scene
+    """A Scene from the nested dict of ``scene_to_data`` / TOML; strict: unknown keys,
+    wrong types and out-of-range values raise one InputError naming the field."""
+    from .scene import Scene
 
     arrays = arrays or {}
-    data = dict(data)
-    allowed = set(SECTIONS) | {"t_end", "beta", "units", "name"}
+    if not isinstance(data, dict):
+        raise InputError("scene", f"must be a table, got {type(data).__name__}")
+    allowed = set(SECTIONS) | set(TOP)
     for key in data:
         if key not in allowed:
             raise InputError(key, f"unknown key; accepted: {', '.join(sorted(allowed))}")
-
-    def value(section, key, v):
-        if isinstance(v, dict) and set(v) == {"array"}:
-            return np.asarray(arrays[v["array"]])
-        if isinstance(v, dict) and set(v) == {"float"}:
-            return float(v["float"])
-        if isinstance(v, list) and section in ("law", "loading") and key != "origin":
-            try:
-                arr = np.asarray(v, dtype=bool if key in ("bonded", "initial_crack") else float)
-            except (TypeError, ValueError):
-                raise InputError(f"{section}.{key}", "must be a number or an (n1, n3) array") from None
-            return arr
-        return v
-
-    def build(section, cls, d):
-        d = dict(d or {})
-        names = {f.name for f in dataclasses.fields(cls)}
-        for key in d:
-            if key not in names:
-                raise InputError(f"{section}.{key}", f"unknown key; accepted: {', '.join(sorted(names))}")
-        kwargs = {k: value(section, k, v) for k, v in d.items()}
-        if section == "record" and kwargs.get("stations"):
-            kwargs["stations"] = {k: tuple(v) for k, v in kwargs["stations"].items()}
-        if section == "record" and kwargs.get("region"):
-            kwargs["region"] = {k: tuple(v) for k, v in kwargs["region"].items()}
-        if section == "law" and "origin" in kwargs:
-            kwargs["origin"] = tuple(kwargs["origin"])
-        try:
-            return cls(**kwargs)
-        except TypeError as exc:
-            raise InputError(section, str(exc)) from None
-
-    if "law" not in data or "kind" not in dict(data["law"]):
+    law_data = data.get("law")
+    if not isinstance(law_data, dict) or "kind" not in law_data:
         raise InputError("law.kind", f"is required; accepted: {', '.join(sorted(LAWS))}")
-    law_data = dict(data["law"])
+    law_data = dict(law_data)
     kind = law_data.pop("kind")
     if kind not in LAWS:
         raise InputError("law.kind", f"must be one of {', '.join(sorted(LAWS))}, got {kind!r}")
     for required in ("material", "grid", "t_end"):
         if required not in data:
             raise InputError(required, "is required")
-    return Scene(
-        material=build("material", Material, data["material"]),
-        grid=build("grid", Grid, data["grid"]),
-        law=build("law", LAWS[kind], law_data),
-        loading=build("loading", Loading, data.get("loading")),
-        record=build("record", Record, data.get("record")),
-        numerics=build("numerics", Numerics, data.get("numerics")),
-        t_end=data["t_end"], beta=data.get("beta", 0.5),
-        units=data.get("units", {"length": "1", "time": "1", "stress": "1"}),
-        name=data.get("name", "scene"),
-    )
+    classes = _classes()
+    parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("material", "grid")}
+    parts["law"] = _build("law", LAWS[kind], law_data, arrays)
+    for s in ("loading", "record", "numerics"):
+        parts[s] = _build(s, classes[s], data.get(s), arrays)
+    top = {"t_end": _coerce("t_end", "number", data["t_end"], arrays)}
+    if "beta" in data:
+        top["beta"] = _coerce("beta", "number", data["beta"], arrays)
+    if "name" in data:
+        top["name"] = _coerce("name", "string", data["name"], arrays)
+    if "units" in data:
+        top["units"] = _units(data["units"])
+    return Scene(**parts, **top)
 
 
-def scene_to_json(scene) -> tuple[str, dict]:
-    data, arrays = scene_to_data(scene)
-    return json.dumps(data, default=_json_default), arrays
+def _units(units) -> dict:
+    if not isinstance(units, dict):
+        raise InputError("units", f"must be a table {{{', '.join(UNIT_KEYS)}}}, got {units!r}")
+    for key, value in units.items():
+        if key not in UNIT_KEYS:
+            raise InputError(f"units.{key}", f"unknown key; accepted: {', '.join(UNIT_KEYS)}")
+        if not isinstance(value, str):
+            raise InputError(f"units.{key}", f"must be a string, got {value!r}")
+    for key in UNIT_KEYS:
+        if key not in units:
+            raise InputError(f"units.{key}", f"is required when units are given ({', '.join(UNIT_KEYS)})")
+    return dict(units)
 
 
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"cannot serialise {type(obj).__name__}")
+def _from_attr(value):
+    """Undo what netCDF / Zarr do to attrs: numpy arrays and scalars -> Python."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def _field_vars(ds):
+    """{(section, key): values} of the array-valued parameters held by ``ds``:
+    ``<section>_<key>`` on (x1, x3), or ``input_<section>_<key>`` on (input_x1, input_x3)."""
+    out = {}
+    for name in ds.data_vars:
+        stem = name[len("input_"):] if name.startswith("input_") else name
+        section, _, key = stem.partition("_")
+        if section not in ("law", "loading") or not key:
+            continue
+        var = ds[name]
+        prefix = "input_" if name.startswith("input_") else ""
+        dims = (f"{prefix}x1", f"{prefix}x3")
+        if set(var.dims) != set(dims):
+            raise InputError(f"{section}.{key}", f"variable {name!r} must be on dims {dims}, got {var.dims}")
+        if (section, key) in out:
+            raise InputError(f"{section}.{key}", "is given twice (as law_/loading_ and input_ variables)")
+        out[(section, key)] = np.asarray(var.transpose(*dims).values)
+    return out
+
+
+def scene_from_dataset(ds):
+    """Inverse of ``scene_to_dataset``; also reads the scene of a run's output
+    (``cracklab.simulate``), i.e. ``scene_from_dataset(result) == scene_of(result)``."""
+    attrs = dict(ds.attrs)
+    fields = _field_vars(ds)
+    legacy = attrs.get("scene")
+    if isinstance(legacy, str) and legacy.lstrip().startswith("{"):
+        data = json.loads(legacy)
+        arrays = {f"input_{s}_{k}": v for (s, k), v in fields.items()}
+        return scene_from_data(data, arrays)
+    data: dict = {}
+    for key, value in attrs.items():
+        head, dot, rest = key.partition(".")
+        value = _from_attr(value)
+        if key in ("t_end", "beta"):
+            data[key] = value
+        elif key == "scene":
+            data["name"] = value
+        elif dot and head == "units":
+            data.setdefault("units", {})[rest] = value
+        elif dot and head in SECTIONS:
+            section = data.setdefault(head, {})
+            sub, dot2, name = rest.partition(".")
+            if head == "record" and sub in ("stations", "region"):
+                table = section.setdefault(sub, {})
+                if dot2:
+                    table[name] = value
+                elif value not in ([], "", None):
+                    raise InputError(f"record.{sub}", f"must be a table, got {value!r}")
+            else:
+                section[rest] = value
+    for (section, key), values in fields.items():
+        if key in data.get(section, {}):
+            raise InputError(f"{section}.{key}", "is given twice (as an attr and as a variable)")
+        data.setdefault(section, {})[key] = values
+    _restore_attr_types(data)
+    return scene_from_data(data)
+
+
+def _restore_attr_types(data):
+    """Booleans were stored as "true"/"false" and one-element lists may come back as
+    scalars from netCDF: restore them where the schema says so (attrs path only)."""
+    classes = _classes()
+    for section, d in data.items():
+        if section not in SECTIONS or not isinstance(d, dict):
+            continue
+        if section == "law":
+            cls = LAWS.get(d.get("kind"))
+            if cls is None:
+                continue
+        else:
+            cls = classes[section]
+        schema = _schema(section, cls)
+        for key, value in list(d.items()):
+            kind = schema.get(key, ("any", False))[0]
+            if kind in ("boolean", "mask") and isinstance(value, str) and value in ("true", "false"):
+                d[key] = value == "true"
+            elif kind == "strings" and isinstance(value, str):
+                d[key] = [v for v in value.split(",") if v]
+            elif kind == "numbers" and _is_number(value):
+                d[key] = [value]
+            elif kind in ("stations", "region") and isinstance(value, dict):
+                d[key] = {k: [v] if _is_number(v) else v for k, v in value.items()}
+
+
+# ---------------------------------------------------------------------------- comparison
+def _same(a, b) -> bool:
+    if type(a) is not type(b):
+        return False
+    if isinstance(a, np.ndarray):
+        return a.dtype == b.dtype and a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=a.dtype.kind == "f"))
+    if isinstance(a, float):
+        return a == b or (a != a and b != b)
+    if isinstance(a, (tuple, list)):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, dict):
+        return list(a) == list(b) and all(_same(a[k], b[k]) for k in a)
+    if dataclasses.is_dataclass(a):
+        return all(_same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+    return a == b
+
+
+def scenes_equal(a, b) -> bool:
+    """True when two scenes are identical: same parameter types, bit-identical floats
+    and arrays (dtype included). ``Scene.__eq__`` cannot compare array fields."""
+    return _same(a, b)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_positive
 
 TIME_FUNCTIONS = ("step", "ramp", "smooth")
 
@@ -32,8 +32,16 @@ class Loading:
             raise InputError("loading.time", f"must be one of {TIME_FUNCTIONS}, got {self.time!r}")
         if self.time != "step" and not float(self.ramp_time) > 0:
             raise InputError("loading.ramp_time", f"must be > 0 for a ramp, got {self.ramp_time!r}")
+        if not isinstance(self.constant_K, (bool, np.bool_)):
+            raise InputError("loading.constant_K", f"must be true or false, got {self.constant_K!r}")
+        if self.l0 is not None:
+            check_positive("loading.l0", self.l0)
         for c in (1, 2, 3):
             value = self.field(c)
+            try:
+                value = np.asarray(value, dtype=float)
+            except (TypeError, ValueError):
+                raise InputError(f"loading.tau0_{c}", f"must be a number or an (n1, n3) field, got {value!r}") from None
             if not np.all(np.isfinite(value)):
                 raise InputError(f"loading.tau0_{c}", "must be finite")
 

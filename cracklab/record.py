@@ -33,16 +33,29 @@ class Record:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")
         if self.times is not None:
-            object.__setattr__(self, "times", tuple(float(t) for t in np.atleast_1d(self.times)))
+            try:
+                times = tuple(float(t) for t in np.atleast_1d(self.times))
+            except (TypeError, ValueError):
+                raise InputError("record.times", f"must be a list of times, got {self.times!r}") from None
+            object.__setattr__(self, "times", times)
         if self.every is not None and self.times is not None:
             raise InputError("record.times", "give either record.every or record.times, not both")
         if self.region is not None:
-            for key in self.region:
+            for key, bounds in dict(self.region).items():
                 if key not in ("x1", "x3"):
                     raise InputError(f"record.region.{key}", "unknown key; accepted: x1, x3")
+                if not (np.ndim(bounds) == 1 and len(bounds) == 2 and bounds[0] <= bounds[1]):
+                    raise InputError(f"record.region.{key}", f"must be (lo, hi) with lo <= hi, got {bounds!r}")
         if self.stations is not None:
-            object.__setattr__(self, "stations", {str(k): tuple(float(x) for x in v)
-                                                  for k, v in dict(self.stations).items()})
+            stations = {}
+            for k, v in dict(self.stations).items():
+                try:
+                    stations[str(k)] = tuple(float(x) for x in v)
+                except (TypeError, ValueError):
+                    stations[str(k)] = ()
+                if len(stations[str(k)]) not in (1, 2):
+                    raise InputError(f"record.stations.{k}", f"must be (x1, x3) (or (x1,) in 2D), got {v!r}")
+            object.__setattr__(self, "stations", stations)
 
     def snapshot_steps(self, nsteps: int, dt: float) -> np.ndarray:
         if self.times is not None:

@@ -37,6 +37,13 @@ class Numerics:
         if self.window is not None:
             check_positive("numerics.window", self.window)
         check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
+        from .history import ENGINES
+
+        if self.engine not in ENGINES:
+            raise InputError("numerics.engine", f"must be one of {sorted(ENGINES)}, got {self.engine!r}")
+        if isinstance(self.fft_threads, bool) or not isinstance(self.fft_threads, (int, np.integer)) \
+                or self.fft_threads < 1:
+            raise InputError("numerics.fft_threads", f"must be an integer >= 1, got {self.fft_threads!r}")
 
     @property
     def convolution(self) -> str:
@@ -63,6 +70,12 @@ class Scene:
                 raise InputError(name, f"must be a cracklab.{cls.__name__}, got {type(getattr(self, name)).__name__}")
         if type(self.law) not in LAWS.values():
             raise InputError("law", f"must be one of the laws {sorted(LAWS)}, got {type(self.law).__name__}")
+        if not isinstance(self.name, str):
+            raise InputError("name", f"must be a string, got {self.name!r}")
+        units = ("length", "time", "stress")
+        if not isinstance(self.units, dict) or set(self.units) != set(units) \
+                or not all(isinstance(v, str) for v in self.units.values()):
+            raise InputError("units", f"must be a dict of strings with exactly the keys {units}, got {self.units!r}")
         object.__setattr__(self, "t_end", check_positive("t_end", self.t_end))
         object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
@@ -101,6 +114,8 @@ class Scene:
             if key in ("contact", "speed", "origin"):
                 continue
             check(f"law.{key}", value, boolean=key in ("bonded", "initial_crack"))
+            if key in ("bonded", "initial_crack") and value is not None and np.asarray(value).dtype != bool:
+                raise InputError(f"law.{key}", f"must be a boolean mask, got dtype {np.asarray(value).dtype}")
         for c in (1, 2, 3):
             check(f"loading.tau0_{c}", self.loading.field(c), boolean=True)
 
@@ -124,3 +139,26 @@ class Scene:
 
     def replace(self, **changes) -> "Scene":
         return dataclasses.replace(self, **changes)
+
+    # thin wrappers over cracklab.io (lossless round trips, see docs/scenes.md)
+    def to_dataset(self):
+        from .io import scene_to_dataset
+
+        return scene_to_dataset(self)
+
+    def to_toml(self) -> str:
+        from .io import scene_to_toml
+
+        return scene_to_toml(self)
+
+    @staticmethod
+    def from_dataset(ds) -> "Scene":
+        from .io import scene_from_dataset
+
+        return scene_from_dataset(ds)
+
+    @staticmethod
+    def from_toml(text: str) -> "Scene":
+        from .io import scene_from_toml
+
+        return scene_from_toml(text)
