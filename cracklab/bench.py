@@ -12,7 +12,7 @@ from .loading import Loading
 from .material import Material
 from .record import Record
 from .scene import Numerics, Scene
-from .spectral import Transforms
+from .spectral import Transforms, backend_name
 from .stability import beta_max
 from .stepper import steps
 
@@ -64,6 +64,6 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False):
         "n1": n1, "n3": n3, "mode": mode, "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (n1 * n3),
-        "fft_pair_ms": fft_pair_ms(grid), "fft_backend": Transforms.backend,
+        "fft_pair_ms": fft_pair_ms(grid), "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     }
