@@ -83,6 +83,10 @@ class Scene:
         if not active:
             raise InputError("loading", f"no load on a component the law {self.law.kind!r} acts on "
                                         f"(law components {self.law.components})")
+        if self.loading.constant_K and self.loading.l0 is None \
+                and getattr(self.law, "initial_crack", None) is None:
+            raise InputError("loading.l0", "must be given (> 0) for constant_K when the law has no initial crack "
+                                           "to measure it from")
         for c in self.loading.loaded():
             if c not in self.law.components:
                 raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}")

@@ -70,3 +70,8 @@ def test_load_on_component_law_cannot_carry():
 def test_record_outside_grid():
     with pytest.raises(InputError, match="record.stations.far"):
         small_scene(record=Record(stations={"far": (2.0, 0.5)}))
+
+
+def test_constant_K_needs_a_length():
+    with pytest.raises(InputError, match="loading.l0"):
+        small_scene(law=LinearCohesive(tau_c=1.0, delta_c=1.0), loading=Loading(tau0_2=1.0, constant_K=True))
