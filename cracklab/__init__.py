@@ -5,7 +5,8 @@ Geubelle & Rice (1995), J. Mech. Phys. Solids 43(11): modes I, II and III, 3D an
 
 __version__ = "0.1.0"
 
-from . import kernels, scenes  # noqa: E402
+from . import analysis, ensemble, kernels, scenes  # noqa: E402
+from .ensemble import open_ensemble  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
 from .grid import Grid  # noqa: E402
 from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree  # noqa: E402
@@ -18,6 +19,7 @@ from .simulate import scene_of, simulate, stations  # noqa: E402
 
 __all__ = [
     "Grid", "InputError", "LinearCohesive", "Loading", "Material", "Numerics", "PrescribedRupture",
-    "Record", "Scene", "SimulationError", "SlipWeakening", "TractionFree", "kernels", "modal_response",
+    "Record", "Scene", "SimulationError", "SlipWeakening", "TractionFree", "analysis", "ensemble",
+    "kernels", "modal_response", "open_ensemble",
     "point_load", "scene_of", "scenes", "simulate", "stations", "__version__",
 ]

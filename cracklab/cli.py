@@ -16,11 +16,21 @@ def main() -> None:
 @main.command()
 @click.option("--out", default="out", show_default=True, type=click.Path(file_okay=False),
               help="Directory to write demo output into.")
-def demo(out: str) -> None:
-    """Run the demonstration: Lamb's problem against Pekeris, to Zarr and PNG."""
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run the ensemble on this dask scheduler (default: env DASK_SCHEDULER_ADDRESS, "
+                   "else an embedded local cluster).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes of the local cluster (default: one per core).")
+@click.option("--no-lamb", is_flag=True, help="Skip the Lamb verification figure.")
+def demo(out: str, scheduler, workers, no_lamb) -> None:
+    """Run the demonstration: the asperity ensemble of studies/asperity_ensemble on a
+    local dask cluster into OUT/ensemble.zarr with summary figures OUT/*.png, and
+    Lamb's problem against Pekeris (OUT/lamb.zarr, OUT/lamb.png)."""
     import cracklab.demo
 
-    cracklab.demo.main(out=out)
+    ok = cracklab.demo.main(out=out, scheduler=scheduler, workers=workers, lamb=not no_lamb)
+    if ok is False:
+        sys.exit(1)
 
 
 def _load_scene(path: str):
@@ -69,6 +79,114 @@ def run(scene: str, output: str, progress) -> None:
     except SimulationError as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"cracklab: wrote {output}")
+
+
+@main.command()
+@click.argument("study", type=click.Path(exists=True, dir_okay=False))
+@click.option("-o", "--output", required=True, type=click.Path(), help="Zarr store of the ensemble.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Address of a running dask scheduler (default: env DASK_SCHEDULER_ADDRESS, "
+                   "else an embedded LocalCluster).")
+@click.option("--workers", type=click.IntRange(min=1), default=None,
+              help="Worker processes of the embedded LocalCluster (default: one per core).")
+@click.option("--resume/--no-resume", default=True, show_default=True,
+              help="Skip members already complete in OUTPUT.")
+@click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
+def sweep(study: str, output: str, scheduler, workers, resume, progress) -> None:
+    """Run the ensemble of STUDY (a STUDY.toml, see docs/ensembles.md) into OUTPUT.
+
+    Exits with status 1 when a member failed (the failures are listed, and recorded
+    with their error in the member's group); a rerun redoes only what is not complete."""
+    from .ensemble import run_study
+    from .errors import InputError
+
+    try:
+        result = run_study(study, output, scheduler=scheduler, workers=workers, resume=resume,
+                           progress=progress)
+    except InputError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"cracklab: {result.summary()}")
+    if not result.ok:
+        sys.exit(1)
+
+
+PLOT_KINDS = ("all", "snapshot", "rupture", "length", "summary", "panels", "gif")
+
+
+@main.command()
+@click.argument("store", type=click.Path(exists=True))
+@click.option("-o", "--output", type=click.Path(), default=None,
+              help="Output file (one kind) or directory (--kind all); default next to STORE.")
+@click.option("--kind", type=click.Choice(PLOT_KINDS), default="all", show_default=True,
+              help="snapshot: a field at one time; rupture: rupture-time contours; length: mean "
+                   "crack length vs t; summary / panels: ensemble figures; gif: animation.")
+@click.option("--field", default="delta_2", show_default=True, help="Field for snapshot and gif.")
+@click.option("--time", "time_", type=float, default=None, help="Snapshot time (default: the last).")
+@click.option("--member", default=None, help="Ensemble member id (or position) for run figures.")
+@click.option("--by", default=None, help="Ensemble parameter that colours the curves.")
+@click.option("--x", "x_param", default=None, help="Ensemble parameter on the x axis of the summary.")
+def plot(store, output, kind, field, time_, member, by, x_param) -> None:
+    """Figures of a run or of an ensemble STORE (PNG, or GIF for --kind gif)."""
+    from pathlib import Path
+
+    import xarray as xr
+
+    from . import plot as P
+    from .ensemble import is_ensemble, open_ensemble
+    from .errors import InputError
+
+    try:
+        ens = is_ensemble(store)
+        ds = open_ensemble(store) if ens else xr.open_zarr(store, consolidated=False)
+    except InputError as exc:
+        raise click.ClickException(str(exc)) from None
+    stem = Path(store.rstrip("/")).name.removesuffix(".zarr")
+    parent = Path(store.rstrip("/")).parent
+    if member is not None and member.isdigit() and ens and member not in set(map(str, ds.member.values)):
+        member = int(member)
+    try:
+        if kind == "all":
+            out = Path(output) if output else parent / f"{stem}_plots"
+            paths = P.summary_figures(ds, out, field=field, by=by, x=x_param, gif_member=member)
+        else:
+            ext = "gif" if kind == "gif" else "png"
+            out = Path(output) if output else parent / f"{stem}_{kind}.{ext}"
+            if kind in ("summary", "panels") and not ens:
+                raise click.ClickException(f"--kind {kind} needs an ensemble store")
+            if kind == "snapshot":
+                P.snapshot(ds, field, t=time_, member=member, path=out)
+            elif kind == "rupture":
+                P.rupture_contours(ds, member=member, path=out)
+            elif kind == "length":
+                P.crack_length_plot(ds if member is None else P._member(ds, member), by=by, path=out)
+            elif kind == "summary":
+                P.ensemble_summary(ds, by=by, x=x_param, path=out)
+            elif kind == "panels":
+                P.ensemble_panels(ds, path=out)
+            else:
+                P.animate(ds, out, field, member=member)
+            paths = [out]
+    except (ValueError, KeyError) as exc:
+        raise click.ClickException(str(exc)) from None
+    for p in paths:
+        click.echo(f"cracklab: wrote {p}")
+
+
+@main.command()
+@click.argument("store", type=click.Path(exists=True))
+@click.option("--netcdf", "netcdf", required=True, type=click.Path(dir_okay=False),
+              help="netCDF4 file to write.")
+@click.option("--member", default=None, help="Only this ensemble member (default: the whole ensemble).")
+def export(store, netcdf, member) -> None:
+    """Write a run or an ensemble STORE (or one --member of it) to a netCDF4 file."""
+    from .ensemble import export_netcdf
+    from .errors import InputError
+
+    try:
+        out = export_netcdf(store, netcdf, member=member)
+    except InputError as exc:
+        raise click.ClickException(str(exc)) from None
+    click.echo(f"cracklab: wrote {out}")
 
 
 @main.command()
