@@ -59,6 +59,22 @@ gamma = 0.5, for 0 < gamma <~ 2.2, and decay at 2.3.  Only the trapezoid
 pre-integration (46) adds enough damping for displacement/trapezoid/explicit to
 decay for all gamma <= 2.3; it blows up from about 2.35.
 
+Product integration and predictor-corrector (docs/stability.md).  The schemes above
+let the mode II Rayleigh oscillation grow (about 9.3e-3 gamma^2 per unit T for the
+default displacement/trapezoid/explicit scheme): sampling ``I = int_0^T C``, whose slope
+jumps to C(0) at T = 0, and the trapezoid pre-integration each shift the discrete
+Rayleigh root by ``-C(0) gamma^2/12``, which beats the damping of the scheme in mode II.
+``convolution="product"`` / ``"product-cubic"`` (velocity formulation only) integrate Z
+exactly against the piecewise-linear / piecewise-cubic interpolant of the velocity
+history, with d_n the exact integral of the same interpolant (:func:`product_weights`).
+The current velocity then enters only through a small instantaneous weight, which
+``integration="predictor-corrector"`` applies to a predicted velocity (predictor:
+velocity held over the step; one corrector pass).  ``STABLE_SCHEME`` (cubic, one pass)
+is fourth order and does not grow for modes I, II, III up to gamma = 2.6 (3.0 tested);
+the linear one is second order and stable to 2.5.  "explicit" with a product
+convolution is the predictor alone and "semi-implicit" solves for r_n (not usable on a
+grid, where the instantaneous weight is non-local).
+
 Note: read the coordinate as ``r["T"]``; ``r.T`` is the xarray transpose.
 """
 from __future__ import annotations
@@ -77,9 +93,12 @@ __all__ = [
     "CONVOLUTIONS",
     "INTEGRATIONS",
     "SCHEMES",
+    "STABLE_SCHEME",
+    "PRODUCT_CONVOLUTIONS",
     "MAX_STEPS",
     "modal_response",
     "implicit_coefficient",
+    "product_weights",
     "eta_hat",
     "long_time_amplitude",
     "long_time_period",
@@ -97,7 +116,15 @@ SCHEMES = list(product(FORMULATIONS, CONVOLUTIONS, INTEGRATIONS))
 #: refuse runs with more time steps than this (the work is O(N^2))
 MAX_STEPS = 200_000
 
-_ALL_CONVOLUTIONS = CONVOLUTIONS + ("exact",)
+#: product integration of Z against the interpolated velocity: piecewise linear
+#: ("product", second order) or piecewise cubic ("product-cubic", fourth order)
+PRODUCT_CONVOLUTIONS = ("product", "product-cubic")
+_ALL_CONVOLUTIONS = CONVOLUTIONS + ("exact",) + PRODUCT_CONVOLUTIONS
+_ALL_INTEGRATIONS = INTEGRATIONS + ("predictor-corrector",)
+#: the scheme recommended for the full grid (docs/stability.md): velocity formulation,
+#: product integration of Z against the piecewise-linear velocity, and one
+#: predictor-corrector pass of the semi-implicit update (50)
+STABLE_SCHEME = ("velocity", "product-cubic", "predictor-corrector")
 
 
 # ----------------------------------------------------------------------------- checks
@@ -145,6 +172,22 @@ def _simpson_n(value) -> int:
     return int(value)
 
 
+def _passes(value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise InputError("corrector_passes", f"must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+def _scheme(formulation, convolution, integration):
+    formulation = _choice("formulation", formulation, FORMULATIONS)
+    convolution = _choice("convolution", convolution, _ALL_CONVOLUTIONS)
+    integration = _choice("integration", integration, _ALL_INTEGRATIONS)
+    if convolution in PRODUCT_CONVOLUTIONS and formulation != "velocity":
+        raise InputError("convolution", f"{convolution!r} is implemented for the velocity formulation "
+                         "only (formulation='velocity')")
+    return formulation, convolution, integration
+
+
 def _n_steps(gamma: float, T_end: float) -> int:
     # ceil, tolerant of rounding in T_end / gamma (e.g. 0.3 / 0.1)
     ratio = T_end / gamma
@@ -175,6 +218,258 @@ def _weights(mode, gamma, N, nu, formulation, convolution, simpson_n):
     return w
 
 
+# Gauss-Legendre nodes on [0, 1] for the cell moments of Z (Z is entire; 10 nodes give
+# ~1e-15 relative accuracy up to gamma = 3, where a cell spans 5 rad of the P wave)
+_GLU, _GLW = np.polynomial.legendre.leggauss(10)
+_GLU = 0.5 * (_GLU + 1.0)
+_GLW = 0.5 * _GLW
+
+
+def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
+    """Weights of the product-integration convolutions (velocity formulation), for an engine.
+
+    The velocity history is interpolated between the samples r_k (order 1: linearly;
+    order 3: cubic Lagrange through r_{k-1}..r_{k+2} on [t_k, t_{k+1}], quadratic through
+    r_{n-2}, r_{n-1}, r_n on the newest cell and through r_0, r_1, r_2 on the oldest), and
+    Z is integrated exactly (10-point Gauss-Legendre per cell of the closed-form Z)
+    against the interpolant.  With these weights, at step n,
+
+        S^v_n = sum_{m=0}^{n} W_m r_{n-m} + sum_{i=0}^{2} E_i(n) r_i          (i <= n)
+
+    is ``(1/dt) int_0^{t_n} Z(q c_s (t_n - t')) r(t') dt'`` and the matching
+    displacement (the exact integral of the same interpolant) is
+    ``d_n = sum_{k=0}^{n} r_k - (r_n + r_0)/2`` (order 1, the trapezoid rule (50)) or
+    ``d_n = sum_k r_k - (15 (r_n + r_0) - 4 (r_{n-1} + r_1) + (r_{n-2} + r_2)) / 24``
+    (order 3, n >= 2; n = 1 is the trapezoid rule).  W_0 multiplies the current
+    velocity; the E_i(n) vanish when the run starts at rest (r_0 = r_1 = r_2 = 0).
+
+    part "lag": ``W_j``; part "start0", "start1", "start2": ``E_i(n)`` at ``n = j``.
+    Broadcast over ``gamma >= 0`` and integer ``j >= 0``.
+    """
+    from .kernels import KERNELS
+
+    if kernel not in KERNELS:
+        raise InputError("kernel", f"must be one of {', '.join(map(repr, KERNELS))}; got {kernel!r}")
+    nu = _poisson(nu)
+    if order not in (1, 3) or isinstance(order, bool):
+        raise InputError("order", f"must be 1 or 3, got {order!r}")
+    part = _choice("part", part, ("lag", "start0", "start1", "start2"))
+    g = np.asarray(gamma, dtype=float)
+    if not np.all(np.isfinite(g)) or np.any(g < 0):
+        raise InputError("gamma", "must be finite and >= 0")
+    jj = np.asarray(j)
+    if jj.dtype.kind not in "iu" or np.any(jj < 0):
+        raise InputError("j", "must hold non-negative integers")
+    g, jj = np.broadcast_arrays(g, jj.astype(np.int64))
+
+    def cell(c, basis, s):
+        """weight of node s of `basis` on kernel cell c (0 where c < 0)."""
+        cc = np.maximum(c, 0)
+        M = _moments_at(kernel, g, cc, nu)
+        return np.where(c >= 0, np.tensordot(basis[s], M, axes=1), 0.0)
+
+    if order == 1:
+        if part == "lag":
+            out = np.where(jj >= 1, cell(jj - 1, _LINEAR, 0), 0.0) + cell(jj, _LINEAR, 1)
+        elif part == "start0":
+            out = np.where(jj >= 1, -cell(jj, _LINEAR, 1), 0.0)
+        else:
+            out = np.zeros(g.shape)
+        return out[()] if out.ndim == 0 else out
+    n = jj
+    if part == "lag":
+        out = np.zeros(g.shape)
+        for s in (-1, 0, 1, 2):
+            c = n - 1 + s
+            out = out + np.where(c >= 1, cell(c, _CUBIC, s), 0.0)
+        for m in (0, 1, 2):
+            out = out + np.where(n == m, cell(np.zeros_like(n), _NEWEST, 1 - m), 0.0)
+    else:
+        i = int(part[-1])
+        out = cell(n - 1, _OLDEST, i)
+        for k, c in ((0, n - 1), (-1, n), (-2, n + 1)):  # cells with r_i at node i - k
+            if -1 <= i - k <= 2:
+                out = out - cell(c, _CUBIC, i - k)
+        out = np.where(n >= 2, out, 0.0)
+        if i <= 1:  # n = 1: one linear cell; E_i(1) = exact weight minus the lag weight
+            lag = product_weights(kernel, g, 1 - i, nu=nu, order=3, part="lag")
+            out = np.where(n == 1, cell(np.zeros_like(n), _LINEAR, i) - lag, out)
+    return out[()] if out.ndim == 0 else out
+
+
+def _moments_at(kernel, g, c, nu):
+    """M[p] = int_0^1 Z((c + 1 - u') g) u'^p du', p = 0..3, broadcast over g and c."""
+    from .kernels import Z
+
+    T = (np.asarray(c, dtype=float)[..., None] + 1.0 - _GLU) * np.asarray(g, dtype=float)[..., None]
+    z = np.asarray(Z(kernel, T, nu), dtype=float) * _GLW
+    return np.stack([z @ _GLU**p for p in range(4)])
+
+
+# Lagrange bases in u' = (t' - t_k)/dt on a velocity cell [t_k, t_{k+1}], as power
+# coefficients (constant first), for the node offsets (in steps, relative to t_k)
+def _lagrange(nodes):
+    out = {}
+    for xi in nodes:
+        c = np.array([1.0])
+        for xj in nodes:
+            if xj != xi:
+                c = np.polynomial.polynomial.polymul(c, np.array([-xj, 1.0])) / (xi - xj)
+        out[xi] = np.pad(c, (0, 4 - c.size))
+    return out
+
+
+_CUBIC = _lagrange((-1, 0, 1, 2))  # interior cells
+_NEWEST = _lagrange((-1, 0, 1))  # cell [t_{n-1}, t_n]: quadratic through n-2, n-1, n
+_OLDEST = _lagrange((0, 1, 2))  # cell [t_0, t_1]: quadratic through 0, 1, 2
+_LINEAR = _lagrange((0, 1))
+_POWERS = 1.0 / np.arange(1, 5)  # int_0^1 u'^p du'
+
+
+def _z_moments(mode, gamma, ncell, nu):
+    """M[p, c] = int_0^1 Z((c + 1 - u') gamma) u'^p du', p = 0..3, cells c = 0..ncell-1.
+
+    Cell c of the kernel (T in [c gamma, (c+1) gamma]) is the velocity cell
+    [t_k, t_{k+1}], k = n - 1 - c, at step n; u' runs forward in time on it.
+    """
+    from .kernels import Z
+
+    T = (np.arange(ncell)[:, None] + 1.0 - _GLU[None, :]) * gamma
+    z = np.asarray(Z(mode, T, nu), dtype=float) * _GLW
+    return np.stack([z @ _GLU**p for p in range(4)])
+
+
+def _product_tables(mode, gamma, N, nu, order):
+    """Lag weights W_m, start-up corrections E[i, n] (samples r_0, r_1, r_2 at step n) and
+    the end corrections of the displacement sum, for product integration of order 1 or 3.
+
+    At step n: S^v_n = sum_{m=0}^n W_m r_{n-m} + sum_{i<=2, i<=n} E[i, n] r_i and
+    d_n = sum_{k=0}^n r_k + sum_j D_new[j] r_{n-j} + sum_i D_old[i] r_i (n >= 2 for order 3).
+    """
+    M = _z_moments(mode, gamma, N + 3, nu)
+    E = np.zeros((3, N + 1))
+    if order == 1:
+        right = _LINEAR[0] @ M  # weight of the left node r_k on cell c
+        left = _LINEAR[1] @ M  # weight of the right node r_{k+1}
+        W = np.zeros(N + 1)
+        W[0] = left[0]
+        W[1:] = right[:N] + left[1:N + 1]
+        # r_0: only the cell [t_0, t_1] (cell n-1), not the one before t = 0 (cell n)
+        E[0, 1:] = -left[np.arange(2, N + 2) - 1]
+        return W, E, (-0.5,), (-0.5,)
+    A = {s: _CUBIC[s] @ M for s in (-1, 0, 1, 2)}
+    B_new = {s: float(_NEWEST[s] @ M[:, 0]) for s in (-1, 0, 1)}
+    B_old = {s: _OLDEST[s] @ M for s in (0, 1, 2)}
+    W = np.zeros(N + 1)
+    m = np.arange(N + 1)
+    for s in (-1, 0, 1, 2):
+        c = m - 1 + s
+        ok = c >= 1
+        W[ok] += A[s][c[ok]]
+    for j in (0, 1, 2):
+        W[j] += B_new[1 - j]
+    # replace cell n-1 (k = 0) by the quadratic through r_0, r_1, r_2 and drop the cells
+    # n and n+1 (before t = 0) that the lag weights include
+    n = np.arange(2, N + 1)
+    E[0, 2:] = B_old[0][n - 1] - A[0][n - 1] - A[1][n] - A[2][n + 1]
+    E[1, 2:] = B_old[1][n - 1] - A[1][n - 1] - A[2][n]
+    E[2, 2:] = B_old[2][n - 1] - A[2][n - 1]
+    if N >= 1:
+        # n = 1: a single cell, linear
+        E[1, 1] = float(_LINEAR[1] @ M[:, 0]) - W[0]
+        E[0, 1] = float(_LINEAR[0] @ M[:, 0]) - W[1]
+    d_new = (-15.0 / 24.0, 4.0 / 24.0, -1.0 / 24.0)
+    return W, E, d_new, d_new
+
+
+def _run_product(mode, gamma, N, nu, order, integration, passes):
+    """Velocity formulation (43) with product integration; returns (r_0..r_N, overflow T or None).
+
+    Step n: S^v_n = S_known + cS r_n and d_n = D_known + cD r_n (see
+    :func:`product_weights`), r_n = A + B r_n with
+    A = 1 - (gamma/eta) Z(0) D_known + (gamma/eta) S_known, B = (gamma/eta) (cS - Z(0) cD).
+    """
+    eta = eta_hat(mode, nu)
+    g = gamma / eta
+    z0 = _static(mode, nu)
+    W, E, d_new, d_old = _product_tables(mode, gamma, N, nu, order)
+    wr = np.ascontiguousarray(W[::-1])  # wr[N - m] = W_m
+    r = np.full(N + 1, np.nan)
+    r[0] = 1.0
+    total = 1.0  # sum_{k<n} r_k
+    solve = integration == "semi-implicit"
+    npass = passes + 1 if integration == "predictor-corrector" else 1
+    W0 = float(W[0])
+    dn = [float(c) for c in d_new] + [0.0] * (3 - len(d_new))
+    do = [float(c) for c in d_old] + [0.0] * (3 - len(d_old))
+    start_S = None  # sum_i E[i, n] r_i for n >= 3, once r_0..r_2 are known
+    start_D = 0.0
+    r1 = r2 = 0.0  # r_{n-1}, r_{n-2} as floats
+    bad_from = None
+    with np.errstate(over="ignore", invalid="ignore"):
+        for n in range(1, N + 1):
+            S_known = float(np.dot(wr[N - n:N], r[:n]))
+            if n >= 3:
+                if start_S is None:
+                    start_S = (E[0] * r[0] + E[1] * r[1] + E[2] * r[2]).tolist()
+                    start_D = float(do[0] * r[0] + do[1] * r[1] + do[2] * r[2])
+                    B_coef = g * (W0 - z0 * (1.0 + dn[0]))
+                S_known += start_S[n]
+                D_known = total + dn[1] * r1 + dn[2] * r2 + start_D
+                A = 1.0 - g * z0 * D_known + g * S_known
+                if solve:
+                    rn = A / (1.0 - B_coef)
+                else:
+                    rn = r1
+                    for _ in range(npass):
+                        rn = A + B_coef * rn
+                r[n] = rn
+                total += rn
+                r1, r2 = rn, r1
+                if not math.isfinite(rn):
+                    r[n:] = np.nan
+                    bad_from = n * gamma
+                    break
+                continue
+            else:
+                cS = W0
+                for i in range(n + 1):
+                    if i == n:
+                        cS += E[i, n]
+                    else:
+                        S_known += E[i, n] * r[i]
+                if order == 3 and n == 1:
+                    D_known, cD = 0.5 * r[0], 0.5
+                else:
+                    D_known, cD = total, 1.0 + dn[0]
+                    for j in (1, 2):
+                        if n - j >= 0:
+                            D_known += dn[j] * r[n - j]
+                    for i in range(3):
+                        if i == n:
+                            cD += do[i]
+                        elif i < n:
+                            D_known += do[i] * r[i]
+            A = 1.0 - g * z0 * D_known + g * S_known
+            B = g * (cS - z0 * cD)
+            if solve:
+                rn = A / (1.0 - B)
+            else:
+                # predictor: velocity held over the step (r_n -> r_{n-1}); then the
+                # corrector passes, each an explicit evaluation at the latest value
+                rn = r[n - 1]
+                for _ in range(npass):
+                    rn = A + B * rn
+            r[n] = rn
+            total += float(rn)
+            r1, r2 = float(rn), float(r[n - 1])
+            if not math.isfinite(rn):
+                r[n:] = np.nan
+                bad_from = n * gamma
+                break
+    return r, bad_from
+
+
 def _halves_last(convolution: str) -> bool:
     from .weights import halves_last
 
@@ -190,6 +485,8 @@ def _static(mode, nu) -> float:
 def _coefficients(mode, gamma, nu, formulation, integration, xk0):
     """(prefactor g, Z(0) or None, B) for the recurrence; B is the r_n coefficient."""
     eta = eta_hat(mode, nu)
+    if integration == "predictor-corrector":
+        integration = "semi-implicit"  # the corrector is (50), applied to a predicted r_n
     if formulation == "displacement":
         g = gamma * gamma / eta
         # r_n = 1 - g (xk_0 d_n + hist); d_n holds r_n/2 in the semi-implicit scheme
@@ -208,21 +505,29 @@ def implicit_coefficient(mode, *, gamma, nu=0.25, formulation="displacement",
 
     Each step solves ``r_n = A_n + B r_n``.  B = 0 means the step is explicit; it is
     zero for displacement + explicit and (up to rounding) for velocity + discretized
-    + semi-implicit, where the two r_n contributions cancel.
+    + semi-implicit, where the two r_n contributions cancel.  For
+    ``integration="predictor-corrector"`` B is the coefficient of the semi-implicit
+    corrector (50), which is applied to the predicted r_n instead of being solved for.
     """
     mode = _choice("mode", mode, MODES)
     gamma = _positive("gamma", gamma)
     nu = _poisson(nu)
-    formulation = _choice("formulation", formulation, FORMULATIONS)
-    convolution = _choice("convolution", convolution, _ALL_CONVOLUTIONS)
-    integration = _choice("integration", integration, INTEGRATIONS)
+    formulation, convolution, integration = _scheme(formulation, convolution, integration)
     simpson_n = _simpson_n(simpson_n)
+    if convolution in PRODUCT_CONVOLUTIONS:
+        if integration == "explicit":
+            return 0.0  # the predictor alone: velocity held over the step
+        order = 1 if convolution == "product" else 3
+        W0 = float(product_weights(mode, gamma, 0, nu=nu, order=order, part="lag"))
+        cD = 0.5 if order == 1 else 9.0 / 24.0  # weight of r_n in d_n (steady, n >= 3)
+        return float(gamma / eta_hat(mode, nu) * (W0 - _static(mode, nu) * cD))
     xk0 = _weights(mode, gamma, 0, nu, formulation, convolution, simpson_n)[0]
     return float(_coefficients(mode, gamma, nu, formulation, integration, xk0)[2])
 
 
 def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
-                   convolution="trapezoid", integration="explicit", simpson_n=4) -> xr.DataArray:
+                   convolution="trapezoid", integration="explicit", simpson_n=4,
+                   corrector_passes=1) -> xr.DataArray:
     """Velocity ratio r = V(t)/V(0+) of one Fourier mode under a unit step load.
 
     Parameters
@@ -236,12 +541,27 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
     nu : float in (-1, 0.5)
     formulation : {"displacement", "velocity"}
         Eq. (42) with C, or eq. (43) with Z = int_T^inf C.
-    convolution : {"discretized", "trapezoid", "simpson", "exact"}
-        Weights of eqs. (45), (46), (47) (or exactly pre-integrated kernel).
-    integration : {"explicit", "semi-implicit"}
-        Eq. (49) or (50).
+    convolution : {"discretized", "trapezoid", "simpson", "exact", "product"}
+        Weights of eqs. (45), (46), (47) (or exactly pre-integrated kernel), or
+        "product" (velocity formulation only): Z integrated exactly against the
+        piecewise-linear interpolation of the velocity (:func:`product_weights`).
+    integration : {"explicit", "semi-implicit", "predictor-corrector"}
+        Eq. (49) or (50), or "predictor-corrector": the predictor is the step with the
+        unknown r_n replaced by r_{n-1} (for the velocity formulation: velocity held over
+        the step, ``d*_n = d_{n-1} + r_{n-1}``), followed by ``corrector_passes``
+        evaluations of the semi-implicit step (50) at the latest prediction.  Every
+        pass is explicit (on the grid: one FFT pair and a pointwise law solve).
     simpson_n : even int >= 2
         Sub-intervals of the Simpson pre-integration (47).
+    corrector_passes : int >= 1
+        Corrector passes of the predictor-corrector integration (1: PECE).  Ignored
+        by the other integrations.  Two passes are less stable than one (mode II
+        grows from gamma ~ 2; docs/stability.md).
+
+    The scheme recommended for the grid is :data:`STABLE_SCHEME`
+    (velocity, product, predictor-corrector, one pass): second order, and its
+    single-mode response does not grow for modes I, II, III up to gamma = 2.5
+    (docs/stability.md).
 
     Returns
     -------
@@ -253,10 +573,9 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
     gamma = _positive("gamma", gamma)
     T_end = _positive("T_end", T_end)
     nu = _poisson(nu)
-    formulation = _choice("formulation", formulation, FORMULATIONS)
-    convolution = _choice("convolution", convolution, _ALL_CONVOLUTIONS)
-    integration = _choice("integration", integration, INTEGRATIONS)
+    formulation, convolution, integration = _scheme(formulation, convolution, integration)
     simpson_n = _simpson_n(simpson_n)
+    passes = _passes(corrector_passes)
     N = _n_steps(gamma, T_end)
     if N > MAX_STEPS:
         raise InputError(
@@ -265,12 +584,18 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
             "use a larger gamma or a smaller T_end",
         )
 
+    if convolution in PRODUCT_CONVOLUTIONS:
+        r, bad_from = _run_product(mode, gamma, N, nu, 1 if convolution == "product" else 3,
+                                   integration, passes)
+        return _as_dataarray(r, bad_from, mode, gamma, nu, formulation, convolution, integration,
+                             simpson_n, passes)
     w = _weights(mode, gamma, N, nu, formulation, convolution, simpson_n)
     halve = _halves_last(convolution)
     g, z0, B = _coefficients(mode, gamma, nu, formulation, integration, w[0])
-    if 1.0 - B == 0.0:
+    corrector = integration == "predictor-corrector"
+    if 1.0 - B == 0.0 and not corrector:
         raise InputError("gamma", f"the step equation is singular for gamma = {gamma!r} with this scheme")
-    inv = 1.0 / (1.0 - B)
+    inv = 1.0 / (1.0 - B) if not corrector else None
     explicit = integration == "explicit"
     displacement = formulation == "displacement"
 
@@ -295,7 +620,13 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
                 A = 1.0 - g * (w[0] * dn_known + hist)
             else:
                 A = 1.0 - g * z0 * dn_known + g * hist
-            rn = A * inv
+            if corrector:
+                # predictor: r_n -> r_{n-1}; then `passes` corrector evaluations of (50)
+                rn = r[n - 1]
+                for _ in range(passes + 1):
+                    rn = A + B * rn
+            else:
+                rn = A * inv
             r[n] = rn
             d[n] = dn_known if explicit else dn_known + 0.5 * rn
             if not math.isfinite(rn):
@@ -303,6 +634,14 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
                 bad_from = n * gamma
                 break
 
+    return _as_dataarray(r, bad_from, mode, gamma, nu, formulation, convolution, integration,
+                         simpson_n, passes)
+
+
+def _as_dataarray(r, bad_from, mode, gamma, nu, formulation, convolution, integration, simpson_n,
+                  passes) -> xr.DataArray:
+    corrector = integration == "predictor-corrector"
+    N = r.size - 1
     attrs = {
         "mode": mode,
         "gamma": gamma,
@@ -315,6 +654,8 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
     }
     if convolution == "simpson":
         attrs["simpson_n"] = simpson_n
+    if corrector:
+        attrs["corrector_passes"] = passes
     if bad_from is not None:
         attrs["nonfinite_from_T"] = bad_from
     T = np.arange(N + 1) * gamma

@@ -3,7 +3,7 @@
 ``GAMMA_MAX[scheme][mode]`` is the largest gamma = q c_s dt for which the envelope of
 the single-mode response of that scheme grows by less than 5e-4 per unit T (less than
 a factor e over T = 2000), measured with ``cracklab.modal_response`` over T = 1000 to
-2000 (docs/verification.md, studies/stability_limits.py). The largest gamma on a grid
+2000 (docs/stability.md, studies/stability_map.py). The largest gamma on a grid
 is gamma_M = q_max c_s dt, Eq. (52).
 
 Mode II grows at every gamma with both schemes (about 9e-3 gamma^2 per unit T with the
