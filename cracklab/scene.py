@@ -36,6 +36,9 @@ class Numerics:
             raise InputError("numerics.formulation", f"must be one of {tuple(FORMULATIONS)}, got {self.formulation!r}")
         if self.window is not None:
             check_positive("numerics.window", self.window)
+            if self.engine != "direct":
+                raise InputError("numerics.window", f"a truncated history needs engine 'direct' "
+                                                    f"(engine {self.engine!r} keeps the whole history)")
         check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
         from .history import ENGINES
 

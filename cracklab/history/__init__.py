@@ -8,8 +8,9 @@ owns the physical prefactors; laws and the stepper never see an engine.
 from __future__ import annotations
 
 from .direct import DirectEngine
+from .exponential import ExponentialEngine
 
-ENGINES = {"direct": DirectEngine}
+ENGINES = {"direct": DirectEngine, "exponential": ExponentialEngine}
 
 
 def make_engine(name: str, **kwargs):
@@ -23,4 +24,4 @@ def make_engine(name: str, **kwargs):
     return cls(**kwargs)
 
 
-__all__ = ["DirectEngine", "ENGINES", "make_engine"]
+__all__ = ["DirectEngine", "ENGINES", "ExponentialEngine", "make_engine"]
