@@ -26,7 +26,7 @@ def bench_scene(n1, n3, mode, nsteps, engine="direct"):
     load = {f"tau0_{c}": rng.standard_normal(grid.shape) for c in MODES[mode]}
     comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
     numerics = Numerics(engine=engine)
-    beta = 0.9 * beta_max(grid, numerics.formulation, numerics.convolution, comps)
+    beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps)
     dt = beta * grid.dx_min
     return Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=grid, law=TractionFree(),
                  loading=Loading(**load), t_end=nsteps * dt * (1 - 1e-9), beta=beta,

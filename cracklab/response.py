@@ -5,6 +5,12 @@ into the longitudinal part (kernel C_II) and the transverse part (kernel C_III) 
 each mode, Eqs. (27)-(28) and (34): two scalar convolutions per mode, not four.
 In the plane problem (n3 == 1) component 1 is mode II and component 3 is mode III.
 
+Product scheme (velocity formulation, Z integrated exactly against the piecewise-linear
+velocity history, docs/stability.md):
+    F_n = -(mu q / 2) Z(0) D_n + (mu / 2 c_s) gamma [sum_{m=0}^n W_m V_{n-m} + E_0(n) V_0],
+with D_n = D_{n-1} + dt (V_{n-1} + V_n)/2; the V_n terms form K V_n with
+K = (mu gamma / 2 c_s)(W_0 - Z(0)/2), applied to a predicted then a corrected velocity.
+
 Displacement formulation, Eq. (32) with Eq. (44):
     F_n = -(mu q / 2) gamma sum_{j=0}^n xk_j D_{n-j},          gamma = q c_s dt.
 Velocity formulation, Eq. (33) with Eq. (48), discretised kernel (45):
@@ -30,6 +36,9 @@ class _Channel:
     pre: np.ndarray          # prefactor per mode
     static: np.ndarray | None = None   # velocity formulation: -(mu q/2) Z(0)
     v0: np.ndarray | None = None
+    K: np.ndarray | None = None        # product scheme: coefficient of V_n
+    dknown: np.ndarray | None = None   # product scheme: D_{n-1} + dt V_{n-1}/2
+    H: np.ndarray | None = None        # product scheme: F_n without its V_n term
 
 
 class Response:
@@ -49,17 +58,25 @@ class Response:
         gamma = q * material.cs * dt
         nu, mu = material.nu, material.mu
         self.shear3d = (not grid.plane) and any(c in self.components for c in (1, 3))
-        lag = 1 if formulation == "velocity" else 0
-        if formulation == "velocity":
-            rule = "discretized"
+        self.dt = dt
+        lag = 0 if formulation == "displacement" else 1
+        if formulation != "displacement":
+            rule = "discretized" if formulation == "velocity" else "product"
 
         def channel(kernel):
             eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule,
-                              formulation=formulation, lag=lag, window=window)
+                              formulation="displacement" if formulation == "displacement" else "velocity",
+                              lag=lag, window=window)
             if formulation == "displacement":
                 return _Channel(kernel, eng, -0.5 * mu * q * gamma)
-            static = -0.5 * mu * q * float(Z_kernel(kernel, np.zeros(1), nu)[0])
-            return _Channel(kernel, eng, 0.5 * mu / material.cs * gamma, static=static)
+            z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
+            ch = _Channel(kernel, eng, 0.5 * mu / material.cs * gamma, static=-0.5 * mu * q * z0)
+            if formulation == "product":
+                from .modal import product_weights
+
+                w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
+                ch.K = ch.pre * (w0 - 0.5 * z0)
+            return ch
 
         self.channels: dict[str, _Channel] = {}
         if 2 in self.components:
@@ -104,6 +121,36 @@ class Response:
         return self._split({c: self.fft.forward(fields[c]) for c in self.components})
 
     # -- public -----------------------------------------------------------------------
+    def predict(self, v_prev: dict) -> dict:
+        """Product scheme, step n: f_n with the velocity held at v_{n-1} (the predictor).
+
+        Pushes V_{n-1} into the history; call ``correct`` next with the predicted velocity.
+        """
+        n = self.n
+        self.n = n + 1
+        if n == 0:
+            for ch in self.channels.values():
+                ch.H = None
+            return {c: np.zeros(self.fft.shape) for c in self.components}
+        V = self._forward(v_prev)
+        F = {}
+        for name, ch in self.channels.items():
+            if n == 1:
+                ch.v0 = V[name].copy()
+                ch.dknown = 0.5 * self.dt * V[name]
+            else:
+                ch.dknown = ch.dknown + self.dt * V[name]
+            S = ch.engine.push(V[name]) + ch.engine.start_weight(n) * ch.v0
+            ch.H = ch.static * ch.dknown + ch.pre * S
+            F[name] = ch.H + ch.K * V[name]
+        return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
+
+    def correct(self, v_pred: dict) -> dict:
+        """Product scheme: f_n with the current velocity taken as ``v_pred`` (the corrector)."""
+        V = self._forward(v_pred)
+        F = {name: ch.H + ch.K * V[name] for name, ch in self.channels.items()}
+        return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
+
     def functional(self, delta: dict, v_prev: dict | None = None) -> dict:
         """f_j(x1, x3) at the current step, for each active component j.
 

@@ -14,14 +14,24 @@ from .material import Material
 from .record import Record
 from .stability import beta_max, modes_of
 
-FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized"}
+FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
+
+
+def resolve_formulation(formulation: str, components) -> str:
+    """"auto": the paper's displacement scheme when only mode I is active, the product
+    scheme (stable in mode II, docs/stability.md) whenever a shear component is."""
+    if formulation != "auto":
+        return formulation
+    return "product" if any(c in (1, 3) for c in components) else "displacement"
 
 
 @dataclass(frozen=True)
 class Numerics:
     """Scheme options: ``formulation`` "displacement" (Eq. 32, trapezoid pre-integrated
     kernel (46), explicit update (37)) or "velocity" (Eq. 33, discretised kernel (45),
-    semi-implicit update (50)); history ``engine``; ``window`` truncates the history at
+    semi-implicit update (50)) or "product" (velocity formulation with Z integrated
+    exactly against the piecewise-linear velocity history, trapezoid update (50), one
+    predictor-corrector pass: does not grow in mode II, docs/stability.md); history ``engine``; ``window`` truncates the history at
     T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
     its velocity magnitude first exceeds it."""
 
@@ -32,8 +42,9 @@ class Numerics:
     fft_threads: int = 1
 
     def __post_init__(self):
-        if self.formulation not in FORMULATIONS:
-            raise InputError("numerics.formulation", f"must be one of {tuple(FORMULATIONS)}, got {self.formulation!r}")
+        if self.formulation not in FORMULATIONS and self.formulation != "auto":
+            raise InputError("numerics.formulation",
+                             f"must be one of {('auto',) + tuple(FORMULATIONS)}, got {self.formulation!r}")
         if self.window is not None:
             check_positive("numerics.window", self.window)
             if self.engine != "direct":
@@ -48,9 +59,10 @@ class Numerics:
                 or self.fft_threads < 1:
             raise InputError("numerics.fft_threads", f"must be an integer >= 1, got {self.fft_threads!r}")
 
-    @property
-    def convolution(self) -> str:
-        return FORMULATIONS[self.formulation]
+    def scheme(self, components) -> tuple[str, str]:
+        """(formulation, convolution rule) used for a scene with these active components."""
+        formulation = resolve_formulation(self.formulation, components)
+        return formulation, FORMULATIONS[formulation]
 
 
 @dataclass(frozen=True)
@@ -93,9 +105,9 @@ class Scene:
         for c in self.loading.loaded():
             if c not in self.law.components:
                 raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}")
-        bmax = beta_max(self.grid, self.numerics.formulation, self.numerics.convolution, active)
+        bmax = beta_max(self.grid, *self.numerics.scheme(active), active)
         if self.beta > bmax:
-            raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.numerics.formulation} scheme "
+            raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme "
                                      f"on this grid (modes {', '.join(modes_of(active, self.grid.plane))}), "
                                      f"got {self.beta}")
         self.record.snapshot_steps(self.nsteps, self.dt)
@@ -125,6 +137,11 @@ class Scene:
                 raise InputError(f"law.{key}", f"must be a boolean mask, got dtype {np.asarray(value).dtype}")
         for c in (1, 2, 3):
             check(f"loading.tau0_{c}", self.loading.field(c), boolean=True)
+
+    @property
+    def formulation(self) -> str:
+        """The time-stepping scheme actually used (numerics.formulation with "auto" resolved)."""
+        return resolve_formulation(self.numerics.formulation, self.components)
 
     @property
     def dt(self) -> float:

@@ -10,7 +10,8 @@ class DirectEngine:
     """Direct evaluation of S_n = sum_j w_j x_{n-j}, O(n) work per mode and step.
 
     ``gamma`` holds q c_s dt for each mode (any shape); the weights are those of
-    Eqs. (45)-(47) for the given kernel, rule and formulation, shifted by ``lag``
+    Eqs. (45)-(47) for the given kernel, rule and formulation (or, with rule "product",
+    the product-integration weights of cracklab.modal.product_weights), shifted by ``lag``
     (lag = 1 gives sum_{j>=1} w_j x_{n-j} when x_{n-1} is pushed at step n).
     ``window`` truncates the history at T = q c_s t <= window (None: untruncated).
 
@@ -44,8 +45,13 @@ class DirectEngine:
 
     def _weights(self, j0: int, j1: int) -> np.ndarray:
         j = np.arange(j0, j1)[:, None] + self.lag
-        w = convolution_weights(self.kernel, self._ug[None, :], j, nu=self.nu, rule=self.rule,
-                                formulation=self.formulation)
+        if self.rule == "product":
+            from ..modal import product_weights
+
+            w = product_weights(self.kernel, self._ug[None, :], j, nu=self.nu, order=1, part="lag")
+        else:
+            w = convolution_weights(self.kernel, self._ug[None, :], j, nu=self.nu, rule=self.rule,
+                                    formulation=self.formulation)
         if self.cap is not None:
             # truncate each mode at its own window T <= window
             w = np.where(j * self._ug[None, :] <= self.window, w, 0.0)
@@ -90,3 +96,11 @@ class DirectEngine:
     def weight(self, j: int) -> np.ndarray:
         """w_j (lag included) for every mode."""
         return self._weights(j, j + 1)[0].reshape(self.shape)
+
+    def start_weight(self, n: int) -> np.ndarray:
+        """E_0(n) of the product rule (the start-up term on x_0), for every mode."""
+        from ..modal import product_weights
+
+        e = product_weights(self.kernel, self._ug, np.full(self._ug.shape, n), nu=self.nu, order=1,
+                            part="start0")
+        return np.asarray(e)[self._inv].reshape(self.shape)
