@@ -78,16 +78,12 @@ def steps(scene, response=None):
             f = response.functional(delta)
             trial = delta
         law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
-        length = None
-        if load.constant_K:
-            failed = law.failed(lstate)
-            length = float(np.count_nonzero(failed)) * area / width if failed is not None else None
-            if l0 is None:
-                l0 = load.l0 or length
-                if load.l0 is None:
-                    # Loading.factor scales by sqrt(l0 / l): give it the initial length
-                    load = dataclasses.replace(load, l0=l0)
-            length = length or l0
+        if load.constant_K and l0 is None:
+            l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+            if load.l0 is None:
+                # Loading.factor scales by sqrt(l0 / l): give it the initial length
+                load = dataclasses.replace(load, l0=l0)
+        length = _crack_length(law, lstate, load, area, width, l0)
         tau0 = load.at(t, comps, length)
         strength = law.strength(lstate, t, grid)
         tau_star = {c: tau0[c] + f[c] for c in comps}
