@@ -295,6 +295,13 @@ def _default_by(ens):
             and np.isfinite(_numeric_coord(ens, p)).any()]
 
 
+def _pick_by(cands, by):
+    """``by`` if given, else the second swept parameter (the first is the x axis)."""
+    if by is not None:
+        return by
+    return cands[1] if len(cands) > 1 else cands[0] if cands else None
+
+
 def _colours(values, cmap="viridis"):
     """(colour of each value (None where NaN), legend entries or None, norm or None):
     a few distinct values get discrete colours and a legend, many a colour bar."""
@@ -328,8 +335,7 @@ def crack_length_plot(ds, *, by=None, style=None, ax=None, path=None, cmap="viri
     else:
         plt = _plt()
         cands = _default_by(ds)
-        if by is None:
-            by = cands[1] if len(cands) > 1 else cands[0] if cands else None
+        by = _pick_by(cands, by)
         if style is None:
             style = next((c for c in cands if c != by), None)
         colours, table, norm, cm = _colours(_numeric_coord(ds, by), cmap)
@@ -366,8 +372,7 @@ def ensemble_summary(ens, *, by=None, x=None, path=None, title=None):
     or ``by`` are drawn as grey dashed levels). Defaults: the product axes of the sweep."""
     plt = _plt()
     cands = _default_by(ens)
-    if by is None:
-        by = cands[1] if len(cands) > 1 else cands[0] if cands else None
+    by = _pick_by(cands, by)
     if x is None:
         x = next((c for c in cands if c != by), None)
     fig, (a0, a1) = plt.subplots(1, 2, figsize=(12, 4.4), dpi=110, layout="constrained")

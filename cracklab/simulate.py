@@ -68,7 +68,8 @@ class _Recorder:
         self.pending = []
         self.written = False
         self.times = []
-        self.snap = {f: [] for f in scene.record.fields}
+        # the scene as attrs and input arrays, serialised once per run
+        self.scene_json, self.inputs = scene_to_json(scene)
         self.x1 = grid.x1[self.s1]
         self.x3 = grid.x3[self.s3]
 
@@ -117,10 +118,9 @@ class _Recorder:
         self.pending = []
 
     def global_attrs(self):
-        scene_json, _ = scene_to_json(self.scene)
         return {"Conventions": "CF-1.10", "title": f"cracklab run: {self.scene.name}",
                 "source": f"cracklab {__version__}", "cracklab_version": __version__,
-                "scene": scene_json}
+                "scene": self.scene_json}
 
     def finish(self, last_n):
         self.flush()
@@ -139,8 +139,7 @@ class _Recorder:
                 t_station=("t_station", t_all, {"units": scene.units["time"], "long_name": "time"}))
             for f in self.station_fields:
                 extra[f"station_{f}"] = (("station", "t_station"), self.series[f][:last_n + 1].T, _attrs(scene, f))
-        _, arrays = scene_to_json(scene)
-        for name, arr in arrays.items():
+        for name, arr in self.inputs.items():
             extra[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(scene, name))
         extra.attrs = self.global_attrs()
         if self.store is not None:

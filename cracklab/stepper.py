@@ -94,7 +94,7 @@ def steps(scene, response=None):
                 delta[c] += 0.5 * dt * (v[c] + v_new[c])
         v = v_new
         check_finite(n, t, v, grid)
-        yield State(n, t, delta if not velocity else delta, v, tau,
+        yield State(n, t, delta, v, tau,
                     np.broadcast_to(strength, grid.shape), lstate)
 
 
