@@ -87,6 +87,26 @@ class Response:
             self.channels["III"] = channel("III")
         self.n = 0
 
+    # -- state (checkpoints) -----------------------------------------------------------
+    def get_state(self) -> dict:
+        """The dynamic state: step count, per-channel start-up and product-scheme terms, engines."""
+        out = {"n": self.n, "channels": {}}
+        for name, ch in self.channels.items():
+            out["channels"][name] = {
+                "engine": ch.engine.get_state(),
+                **{k: (None if getattr(ch, k) is None else getattr(ch, k).copy()) for k in ("v0", "dknown", "H")},
+            }
+        return out
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`get_state` (a Response built for the same scene)."""
+        self.n = int(state["n"])
+        for name, ch in self.channels.items():
+            cs = state["channels"][name]
+            ch.engine.set_state(cs["engine"])
+            for k in ("v0", "dknown", "H"):
+                setattr(ch, k, None if cs[k] is None else np.array(cs[k]))
+
     # -- spectral helpers ------------------------------------------------------------
     def _split(self, X: dict) -> dict:
         """Component spectra -> channel spectra (rotation of Eq. 28 for 3D shear)."""

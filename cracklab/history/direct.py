@@ -93,6 +93,30 @@ class DirectEngine:
         self.n = n + 1
         return s.reshape(self.shape)
 
+    def get_state(self) -> dict:
+        """The dynamic state: the step count and the stored history, newest first."""
+        length = self.n if self.cap is None else min(self.n, self.cap)
+        if length == 0:
+            return {"n": 0, "hist": np.zeros((0, self.gamma.size), dtype=complex)}
+        p = self._slot(self.n - 1, self._bufcap)
+        return {"n": self.n, "hist": self._buf[p:p + length].copy()}
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`get_state` (same constructor arguments)."""
+        hist = np.asarray(state["hist"], dtype=complex)
+        n = int(state["n"])
+        self.n = 0
+        cap = self.cap or self.chunk
+        while self.cap is None and cap < hist.shape[0]:
+            cap *= 2
+        self._bufcap = cap
+        self._buf = np.zeros((2 * cap, self.gamma.size), dtype=complex)
+        for j in range(hist.shape[0]):  # hist[j] is x_{n-1-j}
+            q = self._slot(n - 1 - j, cap)
+            self._buf[q] = hist[j]
+            self._buf[q + cap] = hist[j]
+        self.n = n
+
     def weight(self, j: int) -> np.ndarray:
         """w_j (lag included) for every mode."""
         return self._weights(j, j + 1)[0].reshape(self.shape)

@@ -287,6 +287,30 @@ class ExponentialEngine:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
         return [a.shape for a in arrs]
 
+    def _state_arrays(self) -> dict:
+        if self.backend == "numba":
+            return {"buf": self._buf, "sig": self._sig}
+        out = {"sig": self._sig}
+        for i, g in enumerate(self._groups):
+            out[f"buf{i}"] = g[3]
+        return out
+
+    def get_state(self) -> dict:
+        """The dynamic state (step count, direct-tap buffers, recursive states), copied."""
+        out = {k: a.copy() for k, a in self._state_arrays().items()}
+        out["n"] = self.n
+        out["layout"] = self.backend
+        return out
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`get_state` (same constructor arguments and backend)."""
+        if state.get("layout") != self.backend:
+            raise ValueError(f"engine state was saved with backend {state.get('layout')!r}, "
+                             f"this engine uses {self.backend!r}")
+        for k, a in self._state_arrays().items():
+            a[...] = state[k]
+        self.n = int(state["n"])
+
     def push(self, x: np.ndarray) -> np.ndarray:
         """Push x_n (shape of gamma) and return S_n = sum_j w_{j+lag} x_{n-j} (same shape)."""
         x = np.asarray(x, dtype=complex).ravel()
