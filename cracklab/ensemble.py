@@ -45,7 +45,6 @@ import socket
 import sys
 import time
 import traceback
-from collections import OrderedDict
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -62,7 +61,8 @@ SEED_BITS = 53          # seeds fit exactly in float64, int64 and JSON numbers
 
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",
            "run_study", "open_ensemble", "open_member", "member_status", "member_scene",
-           "build_scene", "is_ensemble", "coordinate_name", "export_netcdf", "share_kernel_tables"]
+           "build_scene", "is_ensemble", "coordinate_name", "export_netcdf", "store_lock",
+           "StoreLocked"]
 
 
 # ---------------------------------------------------------------------------- specification
@@ -445,56 +445,6 @@ def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1):
     return scene
 
 
-# ---------------------------------------------------------------------------- kernel tables
-_WEIGHTS_MEMO_SIZE = 32
-
-
-def share_kernel_tables() -> bool:
-    """Memoise the convolution weights of the direct history engine in this process, so
-    members on the same grid and time step (same gamma = q c_s dt) compute their kernel
-    tables once per worker instead of once per member. Off with CRACKLAB_SHARE_KERNELS=0.
-    Returns True when the memo is active."""
-    if os.environ.get("CRACKLAB_SHARE_KERNELS", "1") == "0":
-        return False
-    try:
-        from .history import direct
-    except ImportError:
-        return False
-    original = getattr(direct, "convolution_weights", None)
-    if original is None:
-        return False
-    if getattr(original, "_cracklab_memo", False):
-        return True
-    cache: OrderedDict = OrderedDict()
-
-    def digest(a):
-        a = np.ascontiguousarray(a)
-        return a.dtype.str, a.shape, hashlib.sha1(a.tobytes()).hexdigest()
-
-    @functools.wraps(original)
-    def memo(kernel, gamma, j, **kwargs):
-        try:
-            key = (kernel, digest(gamma), digest(j), tuple(sorted(kwargs.items())))
-            hash(key)
-        except TypeError:
-            return original(kernel, gamma, j, **kwargs)
-        hit = cache.get(key)
-        if hit is not None:
-            cache.move_to_end(key)
-            return hit
-        out = original(kernel, gamma, j, **kwargs)
-        if isinstance(out, np.ndarray):
-            out.setflags(write=False)
-            cache[key] = out
-            if len(cache) > _WEIGHTS_MEMO_SIZE:
-                cache.popitem(last=False)
-        return out
-
-    memo._cracklab_memo = True
-    direct.convolution_weights = memo
-    return True
-
-
 # ---------------------------------------------------------------------------- store helpers
 def _store_str(store) -> str:
     s = os.fspath(store)
@@ -523,20 +473,41 @@ def is_ensemble(store) -> bool:
     return "cracklab_ensemble" in root.attrs
 
 
-def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
-    """Create (or reopen) the root group and members/; record the study and member order."""
+def _check_store(store: str):
+    """Refuse, before anything is written, a path that cannot become or be an ensemble
+    store: a file, a non-empty directory that is not a Zarr group, a Zarr group that is
+    not an ensemble (e.g. a single run), or a store of a newer ensemble format."""
     import zarr
 
+    if "://" not in store:
+        p = Path(store)
+        if p.exists() and not p.is_dir():
+            raise InputError("store", f"{store} is a file, not a Zarr store; choose another path")
     try:
         root = zarr.open_group(store, mode="r")
-        exists = True
-    except Exception:  # noqa: BLE001 - no group yet
-        exists = False
-    if exists:
-        if "cracklab_ensemble" not in root.attrs:
-            what = "the store of a single cracklab run" if "scene" in root.attrs else "a Zarr group"
-            if list(root.keys()):
-                raise InputError("store", f"{store} is {what}, not an ensemble store; choose another path")
+    except Exception:  # noqa: BLE001 - no group there (yet)
+        root = None
+    if root is None:
+        if "://" not in store and Path(store).is_dir() and any(
+                n != LOCK_NAME for n in os.listdir(store)):
+            raise InputError("store", f"{store} is a directory with other content, not a Zarr store; "
+                                      f"choose another path")
+        return
+    attrs = dict(root.attrs)
+    if "cracklab_ensemble" not in attrs:
+        what = "the store of a single cracklab run" if "scene" in attrs else "a Zarr group"
+        if "scene" in attrs or list(root.keys()):
+            raise InputError("store", f"{store} is {what}, not an ensemble store; choose another path")
+        return
+    fmt = attrs.get("cracklab_ensemble")
+    if not isinstance(fmt, int) or isinstance(fmt, bool) or fmt > FORMAT:
+        raise InputError("store", f"{store} is an ensemble store of format {fmt!r}; this cracklab reads "
+                                  f"format {FORMAT} (written by another cracklab version)")
+
+
+def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
+    """Create (or reopen) the root group and members/; record the study and member order."""
+    _check_store(store)
     root = _open_group(store, "a")
     root.require_group(MEMBERS)
     old = list(root.attrs.get("members", []))
@@ -549,6 +520,100 @@ def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
         "axes": json.dumps(list(axes)),
     })
     return root
+
+
+# ---------------------------------------------------------------------------- store lock
+LOCK_NAME = ".cracklab-sweep.lock"
+LOCK_GRACE_S = 10.0     # an empty or unreadable lock younger than this is being written
+
+
+class StoreLocked(InputError):
+    """Another sweep is running into this store (see ``store_lock``)."""
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:       # exists, owned by someone else
+        return True
+    except (OverflowError, ValueError):
+        return False
+    return True
+
+
+def _read_lock(path: Path):
+    try:
+        info = json.loads(path.read_text())
+        return info if isinstance(info, dict) else {}
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError):
+        return {}
+
+
+def _lock_is_stale(path: Path, info: dict) -> bool:
+    """A lock is stale when its process is gone: same host and no such pid, or an
+    empty/unreadable lock older than LOCK_GRACE_S (a sweep killed while creating it)."""
+    if not info:
+        try:
+            return time.time() - path.stat().st_mtime > LOCK_GRACE_S
+        except FileNotFoundError:
+            return True
+    if info.get("host") == socket.gethostname():
+        pid = info.get("pid")
+        return not (isinstance(pid, int) and _pid_alive(pid))
+    return False        # another host: cannot tell, refuse
+
+
+@contextlib.contextmanager
+def store_lock(store: str):
+    """Hold the sweep lock of ``store`` (a file ``.cracklab-sweep.lock`` in the store,
+    created atomically, holding host, pid and start time). A second sweep into the same
+    store raises ``StoreLocked`` naming the holder; a lock left by a sweep that was
+    killed (same host, process gone) is detected as stale and taken over. Only local
+    paths are locked (a URL store is not)."""
+    if "://" in store:
+        yield None
+        return
+    path = Path(store) / LOCK_NAME
+    Path(store).mkdir(parents=True, exist_ok=True)
+    me = {"host": socket.gethostname(), "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+          "token": os.urandom(8).hex()}
+    for _ in range(5):
+        try:
+            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            info = _read_lock(path)
+            if info is None:
+                continue                      # released meanwhile: try again
+            if _lock_is_stale(path, info):
+                stale = path.with_name(f"{LOCK_NAME}.stale-{os.getpid()}-{os.urandom(3).hex()}")
+                try:
+                    os.replace(path, stale)   # atomic: one of several contenders wins
+                    if _read_lock(stale) != info:   # we moved a fresh lock: put it back
+                        os.replace(stale, path)
+                        continue
+                    stale.unlink()
+                except FileNotFoundError:
+                    pass
+                continue
+            holder = f"pid {info.get('pid')} on {info.get('host')}" if info else "another process"
+            since = f", since {info['started']}" if info.get("started") else ""
+            raise StoreLocked("store", f"{store} is in use by another sweep ({holder}{since}); wait for it "
+                                       f"to finish, or, if no sweep is running, delete {path}") from None
+        with os.fdopen(fd, "w") as fh:
+            json.dump(me, fh)
+        break
+    else:
+        raise StoreLocked("store", f"{store}: could not take the sweep lock {path}")
+    try:
+        yield path
+    finally:
+        if _read_lock(path) == me:
+            with contextlib.suppress(FileNotFoundError):
+                path.unlink()
 
 
 def _member_attrs(store, mid):
@@ -593,7 +658,6 @@ def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
     for a member's own failure: the error goes to the member's attrs and the result."""
     t0 = time.perf_counter()
     os.environ.setdefault("CRACKLAB_FFT_THREADS", "1")
-    share_kernel_tables()
     path = member_path(store, member.id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
     meta = {"member_id": member.id, "member_params": canonical_json(member.params),
@@ -675,14 +739,24 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     stop the others: see ``SweepResult.failed`` (and the member's attrs error and
     traceback). ``progress``: a bar over members (default: when stderr is a terminal).
     ``fft_threads``: numerics.fft_threads of every member that does not set it (None: as
-    built)."""
-    from .scene import Scene
-
+    built). Holds the store's sweep lock while it runs: a second sweep into the same
+    store at the same time raises ``StoreLocked`` (see ``store_lock``)."""
     t0 = time.perf_counter()
     sweep = _as_sweep(sweep)
     members = plan(base_scene, sweep)
     store = _store_str(store)
     spec = study_spec or _spec_of(base_scene, sweep)
+    _check_store(store)                  # before the lock: a wrong path is left untouched
+    with store_lock(store):
+        return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
+                           scheduler=scheduler, workers=workers, progress=progress,
+                           fft_threads=fft_threads)
+
+
+def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
+                progress, fft_threads) -> SweepResult:
+    from .scene import Scene
+
     _init_store(store, spec, members, axes=list(sweep.product))
     todo = [m for m in members if not (resume and _is_complete(store, m.id))]
     result = SweepResult(store, members, ran=[m.id for m in todo],
@@ -693,17 +767,10 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     if todo and client is None and scheduler == "synchronous":
         from tqdm import tqdm
 
-        from .history import direct
-
-        original = getattr(direct, "convolution_weights", None)
-        try:
-            for m in tqdm(todo, desc="members", unit="member", disable=not progress, file=sys.stderr):
-                r = _run_member(store, m, base, fft_threads)
-                if r["status"] != "complete":
-                    result.failed[m.id] = r.get("error", "failed")
-        finally:      # the kernel-table memo stays in worker processes, not in the caller's
-            if original is not None:
-                direct.convolution_weights = original
+        for m in tqdm(todo, desc="members", unit="member", disable=not progress, file=sys.stderr):
+            r = _run_member(store, m, base, fft_threads)
+            if r["status"] != "complete":
+                result.failed[m.id] = r.get("error", "failed")
     elif todo:
         from distributed import as_completed
         from tqdm import tqdm

@@ -93,13 +93,20 @@ class Grid:
 
     @property
     def spectral_shape(self) -> tuple[int, int]:
-        """Half spectrum along x1 (real FFT), full spectrum along x3."""
-        return (self.n1 // 2 + 1, self.n3)
+        """Plane problem: half spectrum along x1. 3D: full spectrum along x1, half along x3
+        (the real transform runs along the contiguous axis x3, which FFTW does fastest)."""
+        if self.plane:
+            return (self.n1 // 2 + 1, 1)
+        return (self.n1, self.n3 // 2 + 1)
 
     def wavenumbers(self) -> tuple[np.ndarray, np.ndarray]:
         """k (along x1) and m (along x3) on the spectral layout, each of spectral_shape."""
-        k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
-        m = 2 * np.pi * np.fft.fftfreq(self.n3, d=self.dx3) if not self.plane else np.zeros(1)
+        if self.plane:
+            k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
+            m = np.zeros(1)
+        else:
+            k = 2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1)
+            m = 2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3)
         return np.meshgrid(k, m, indexing="ij")
 
     def q_max(self) -> float:

@@ -1,7 +1,8 @@
 """Real FFTs between the plane (x1, x3) and its Fourier modes (Eq. 36).
 
-Layout: real transform along x1 (n1//2 + 1 modes), complex transform along x3;
-the plane problem (n3 == 1) uses 1D transforms only.
+Layout (Grid.spectral_shape): in 3D a real transform along x3, the contiguous axis
+(n3//2 + 1 modes), and a complex one along x1; the plane problem (n3 == 1) uses 1D real
+transforms along x1 only.
 
 Backends: pyfftw when it is installed (plans made once per grid with FFTW_MEASURE,
 wisdom cached per host under the user cache directory), otherwise scipy.fft.
@@ -91,10 +92,11 @@ class Transforms:
                                     flags=flags)
         else:
             a = pyfftw.empty_aligned((n1, n3), dtype="float64")
-            b = pyfftw.empty_aligned((n1 // 2 + 1, n3), dtype="complex128")
-            self._fwd = pyfftw.FFTW(a, b, axes=(1, 0), threads=self.workers, flags=flags)
-            self._inv = pyfftw.FFTW(b.copy(), a.copy(), axes=(1, 0), direction="FFTW_BACKWARD",
-                                    threads=self.workers, flags=flags)
+            b = pyfftw.empty_aligned((n1, n3 // 2 + 1), dtype="complex128")
+            self._fwd = pyfftw.FFTW(a, b, axes=(0, 1), threads=self.workers, flags=flags)
+            self._inv = pyfftw.FFTW(pyfftw.empty_aligned(b.shape, dtype="complex128"),
+                                    pyfftw.empty_aligned(a.shape, dtype="float64"), axes=(0, 1),
+                                    direction="FFTW_BACKWARD", threads=self.workers, flags=flags)
         _save_wisdom()
 
     def forward(self, x: np.ndarray) -> np.ndarray:
@@ -104,7 +106,7 @@ class Transforms:
             return out[:, None] if self.plane else out
         if self.plane:
             return sfft.rfft(x[:, 0], workers=self.workers)[:, None]
-        return sfft.rfftn(x, axes=(1, 0), workers=self.workers)
+        return sfft.rfftn(x, axes=(0, 1), workers=self.workers)
 
     def inverse(self, X: np.ndarray) -> np.ndarray:
         if self.backend == "pyfftw":
@@ -114,4 +116,4 @@ class Transforms:
             return out[:, None] if self.plane else out
         if self.plane:
             return sfft.irfft(X[:, 0], n=self.shape[0], workers=self.workers)[:, None]
-        return sfft.irfftn(X, s=(self.shape[1], self.shape[0]), axes=(1, 0), workers=self.workers)
+        return sfft.irfftn(X, s=self.shape, axes=(0, 1), workers=self.workers)

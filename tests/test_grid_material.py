@@ -49,8 +49,9 @@ def test_grid_nodes_and_wavenumbers():
     assert g.dx1 == 0.125 and g.dx3 == 0.125
     assert np.allclose(g.x1, np.arange(16) * 0.125)
     k, m = g.wavenumbers()
-    assert k.shape == g.spectral_shape == (9, 8)
+    assert k.shape == g.spectral_shape == (16, 5)  # real transform along x3 (contiguous)
     assert k[1, 0] == pytest.approx(2 * np.pi / 2.0)
+    assert k[-1, 0] == pytest.approx(-2 * np.pi / 2.0)
     assert m[0, 1] == pytest.approx(2 * np.pi / 1.0)
     assert g.q_max() == pytest.approx(np.hypot(np.pi / 0.125, np.pi / 0.125))
 

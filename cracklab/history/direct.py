@@ -44,16 +44,15 @@ class DirectEngine:
         self.n = 0  # number of values pushed
 
     def _weights(self, j0: int, j1: int) -> np.ndarray:
-        j = np.arange(j0, j1)[:, None] + self.lag
-        if self.rule == "product":
-            from ..modal import product_weights
+        # the table of the distinct gammas comes from the process-wide kernel-table cache
+        # (cracklab.history.tables): runs on the same grid and time step share it
+        from .tables import weight_table
 
-            w = product_weights(self.kernel, self._ug[None, :], j, nu=self.nu, order=1, part="lag")
-        else:
-            w = convolution_weights(self.kernel, self._ug[None, :], j, nu=self.nu, rule=self.rule,
-                                    formulation=self.formulation)
+        w = weight_table(self.kernel, self._ug, j0 + self.lag, j1 + self.lag, nu=self.nu, rule=self.rule,
+                         formulation=self.formulation)
         if self.cap is not None:
             # truncate each mode at its own window T <= window
+            j = np.arange(j0, j1)[:, None] + self.lag
             w = np.where(j * self._ug[None, :] <= self.window, w, 0.0)
         return np.ascontiguousarray(w[:, self._inv], dtype=float)
 
