@@ -45,7 +45,7 @@ class Response:
     """Maps the displacement (and velocity) history on the plane to f_j, Eq. (3)."""
 
     def __init__(self, material, grid, dt, components, *, formulation="displacement",
-                 rule="trapezoid", engine="direct", window=None, transforms=None):
+                 rule="trapezoid", engine="direct", window=None, transforms=None, nsteps=None):
         self.components = tuple(sorted(components))
         self.formulation = formulation
         self.fft = transforms or Transforms(grid)
@@ -66,7 +66,7 @@ class Response:
         def channel(kernel):
             eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule,
                               formulation="displacement" if formulation == "displacement" else "velocity",
-                              lag=lag, window=window)
+                              lag=lag, window=window, threads=self.fft.workers, nsteps=nsteps)
             if formulation == "displacement":
                 return _Channel(kernel, eng, -0.5 * mu * q * gamma)
             z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])

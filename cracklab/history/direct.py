@@ -24,7 +24,7 @@ class DirectEngine:
     name = "direct"
 
     def __init__(self, *, kernel, gamma, nu, rule="trapezoid", formulation="displacement",
-                 lag=0, window=None, chunk=256):
+                 lag=0, window=None, chunk=256, threads=1, nsteps=None):
         self.kernel, self.nu, self.rule, self.formulation = kernel, nu, rule, formulation
         self.shape = np.shape(gamma)
         self.gamma = np.asarray(gamma, dtype=float).ravel()

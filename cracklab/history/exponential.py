@@ -28,6 +28,7 @@ history by construction; use the direct engine for windowed runs.
 """
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
@@ -42,19 +43,22 @@ __all__ = ["ExponentialEngine", "direct_taps"]
 # number of per-step numpy calls small (a mode gets at most ~25 % extra taps)
 _LEVELS = np.array(sorted({1, 2, 3, 4, 5, 6, 7, 8} | {int(round(2 ** (k / 4))) for k in range(12, 80)}))
 _RESYNC = 512
-_SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact")  # recompute the powers of weight() exactly every so many calls
+#: start of the fitted representation used by the engine (exact taps for T < ENGINE_T0)
+ENGINE_T0 = 4.0
+_SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact", "product")  # recompute the powers of weight() exactly every so many calls
 
 
-def direct_taps(gamma, lag=0, T0=DEFAULT_T0):
+def direct_taps(gamma, lag=0, T0=DEFAULT_T0, extra=0):
     """Number of direct taps Jd (>= 1) for each gamma: the exact weights w_lag .. w_{lag+Jd-1}.
 
-    J0 = Jd + lag is ceil(T0 / gamma) (at least lag + 1), with Jd rounded up to one of
-    a few levels (``_LEVELS``); gamma = 0 gives Jd = 1.
+    J0 = Jd + lag is ceil(T0 / gamma) + extra (at least lag + 1), with Jd rounded up to one
+    of a few levels (``_LEVELS``); gamma = 0 gives Jd = 1.  ``extra`` = 1 for the product
+    rule, whose weight w_k integrates the kernel from (k - 1) gamma.
     """
     g = np.asarray(gamma, dtype=float)
     pos = g > 0
     with np.errstate(divide="ignore"):
-        j0 = np.where(pos, np.ceil(T0 / np.where(pos, g, 1.0) * (1 - 1e-12)), 1.0)
+        j0 = np.where(pos, np.ceil(T0 / np.where(pos, g, 1.0) * (1 - 1e-12)) + extra, 1.0)
     jd = np.maximum(j0, lag + 1) - lag
     i = np.searchsorted(_LEVELS, jd)
     big = i >= _LEVELS.size
@@ -62,8 +66,22 @@ def direct_taps(gamma, lag=0, T0=DEFAULT_T0):
     return np.where(pos, out, 1).astype(np.int64)
 
 
+def _expm1_over(z):
+    """(e^z - 1) / z, exact at z = 0."""
+    small = np.abs(z) < 1e-8
+    zs = np.where(small, 1.0, z)
+    return np.where(small, 1.0 + 0.5 * z, np.expm1(zs) / zs)
+
+
 def _rule_factor(rule, z, simpson_n=4):
-    """Cell factor f(z), z = lambda gamma: weight of exp(lambda T) on cell k is f rho^k."""
+    """Cell factor f(z), z = lambda gamma: weight of exp(lambda T) on cell k is f rho^(k - shift).
+
+    ``shift`` is :data:`_SHIFT` of the rule: 1 for the product rule, whose hat function
+    reaches back one cell (f = ((e^z - 1)/z)^2, i.e. (e^z - 2 + e^-z)/z^2 times e^z,
+    written so that it never overflows), 0 otherwise.
+    """
+    if rule == "product":
+        return _expm1_over(z) ** 2
     if rule == "discretized":
         return np.ones_like(z)
     if rule == "trapezoid":
@@ -75,14 +93,37 @@ def _rule_factor(rule, z, simpson_n=4):
             acc = acc + (4.0 if m % 2 else 2.0) * np.exp(z * (m / n))
         return acc / (3.0 * n)
     if rule == "exact":  # mean of exp(lambda T) over the cell, (e^z - 1)/z
-        small = np.abs(z) < 1e-8
-        zs = np.where(small, 1.0, z)
-        return np.where(small, 1.0 + 0.5 * z, np.expm1(zs) / zs)
+        return _expm1_over(z)
     raise ValueError(f"the exponential engine does not support rule {rule!r} "
                      f"(supported: {', '.join(_SUPPORTED_RULES)})")
 
 
+_SHIFT = {"product": 1}
+
+
+def _start_factor(z):
+    """E_0 of the product rule for exp(lambda T): -(e^z - 1 - z)/z^2 (times rho^n)."""
+    small = np.abs(z) < 1e-4
+    zs = np.where(small, 1.0, z)
+    return -np.where(small, 0.5 + z / 6.0 + z * z / 24.0, (np.expm1(zs) - zs) / (zs * zs))
+
+
+def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
+    """The exact weights w_k (or, with part "start0", the product rule's E_0(k))."""
+    if rule == "product":
+        from ..modal import product_weights
+
+        return product_weights(kernel, g, np.asarray(k, dtype=np.int64), nu=nu, order=1, part=part)
+    return convolution_weights(kernel, g, k, nu=nu, rule=rule, formulation=formulation)
+
+
 # ----------------------------------------------------------------------------- numba kernel
+#: block length of the numba backend: the recursive states of a mode are advanced B steps
+#: at a time (once every B steps, staggered over the modes), see ``_numba_push``
+BLOCK = 8
+_CHUNKS = 64
+
+
 def _numba_push():
     """The fused per-step loop, compiled with numba (None if numba is unavailable)."""
     try:
@@ -90,42 +131,88 @@ def _numba_push():
     except Exception:  # pragma: no cover - numba is a dependency, but keep numpy working
         return None
 
-    @numba.njit(cache=True, nogil=True)
-    def push(x, n, order, us, start, jd_u, wstart_u, w, buf, rho_u, coef_u, sig, out):
-        """One step for every mode; modes visited in the order of their gamma (index us)."""
-        ph = rho_u.shape[1]
-        for i in range(order.size):
-            m = order[i]
-            u = us[i]
-            J = jd_u[u]
-            b0 = start[i]
-            w0 = wstart_u[u]
-            p = n % J
-            old = buf[b0 + p]
-            buf[b0 + p] = x[m]
-            accr = 0.0
-            acci = 0.0
-            k = p
-            for j in range(J):  # direct taps: w_{lag+j} x_{n-j}
-                v = buf[b0 + k]
-                wj = w[w0 + j]
-                accr += wj * v.real
-                acci += wj * v.imag
-                k -= 1
-                if k < 0:
-                    k += J
-            xr = old.real  # x_{n-J} enters the recursive states
-            xi = old.imag
-            for q in range(ph):
-                r = rho_u[u, q]
-                c = coef_u[u, q]
-                s0 = r * sig[i, 0, q] + xr
-                s1 = r * sig[i, 1, q] + xi
-                sig[i, 0, q] = s0
-                sig[i, 1, q] = s1
-                accr += c.real * s0.real - c.imag * s0.imag
-                acci += c.real * s1.real - c.imag * s1.imag
-            out[m] = complex(accr, acci)
+    @numba.njit(cache=True, nogil=True, parallel=True, fastmath=False)
+    def push(x, n, order, us, start, L_u, wstart_u, w, buf, rr_u, ri_u, er_u, ei_u, sr, si, yr, yi, out):
+        """One step for every mode (modes sorted by unique gamma u; ring of L_u = Jd + B values).
+
+        Mode i with last block update at step n - r (r = (n + u) % B) has states
+        sigma_p = s_p(n - r) and the outputs y_k = Re sum_p e_p rho_p^k sigma_p, k < B; then
+        S_n = sum_{j < Jd + r} w_j x_{n-j} + y_r, with w_j exact for j < Jd and fitted
+        (Re sum_p e_p rho_p^(j - Jd)) beyond: the same sum as the per-step recursion
+        s_p(n) = rho_p s_p(n-1) + x_{n-Jd}, with the states read and written once per block.
+        """
+        m_all = order.size
+        ph = rr_u.shape[1]
+        B = yr.shape[1]
+        for c in numba.prange(_CHUNKS):
+            tar = np.empty(ph)
+            tai = np.empty(ph)
+            tbr = np.empty(ph)
+            tbi = np.empty(ph)
+            for i in range(c * m_all // _CHUNKS, (c + 1) * m_all // _CHUNKS):
+                m = order[i]
+                u = us[i]
+                L = L_u[u]
+                b0 = start[i]
+                w0 = wstart_u[u]
+                jd = L - B
+                p0 = n % L
+                buf[b0 + p0] = x[m]
+                r = (n + u) % B
+                if r == 0:
+                    # advance the states by B steps: inputs x_{n-Jd-B+1} .. x_{n-Jd}, oldest first
+                    for k in range(B - 1, -1, -1):
+                        v = buf[b0 + (n - jd - k) % L]
+                        xr = v.real
+                        xi = v.imag
+                        for p in range(ph):
+                            rr = rr_u[u, p]
+                            ri = ri_u[u, p]
+                            a = sr[i, 0, p]
+                            b = si[i, 0, p]
+                            sr[i, 0, p] = a * rr - b * ri + xr
+                            si[i, 0, p] = a * ri + b * rr
+                            a = sr[i, 1, p]
+                            b = si[i, 1, p]
+                            sr[i, 1, p] = a * rr - b * ri + xi
+                            si[i, 1, p] = a * ri + b * rr
+                    for p in range(ph):
+                        er = er_u[u, p]
+                        ei = ei_u[u, p]
+                        tar[p] = er * sr[i, 0, p] - ei * si[i, 0, p]
+                        tai[p] = er * si[i, 0, p] + ei * sr[i, 0, p]
+                        tbr[p] = er * sr[i, 1, p] - ei * si[i, 1, p]
+                        tbi[p] = er * si[i, 1, p] + ei * sr[i, 1, p]
+                    for k in range(B):
+                        s1 = 0.0
+                        s2 = 0.0
+                        for p in range(ph):
+                            rr = rr_u[u, p]
+                            ri = ri_u[u, p]
+                            s1 += tar[p]
+                            s2 += tbr[p]
+                            a = tar[p]
+                            b = tai[p]
+                            tar[p] = a * rr - b * ri
+                            tai[p] = a * ri + b * rr
+                            a = tbr[p]
+                            b = tbi[p]
+                            tbr[p] = a * rr - b * ri
+                            tbi[p] = a * ri + b * rr
+                        yr[i, k] = s1
+                        yi[i, k] = s2
+                accr = yr[i, r]
+                acci = yi[i, r]
+                q = p0
+                for j in range(jd + r):  # taps: w_j x_{n-j}
+                    v = buf[b0 + q]
+                    wj = w[w0 + j]
+                    accr += wj * v.real
+                    acci += wj * v.imag
+                    q -= 1
+                    if q < 0:
+                        q += L
+                out[m] = complex(accr, acci)
 
     return push
 
@@ -138,6 +225,12 @@ def _get_numba():
     if _NUMBA is None:
         _NUMBA = _numba_push() or False
     return _NUMBA or None
+
+
+def _set_threads(threads):
+    import numba
+
+    numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
 
 
 def _backend_choice():
@@ -162,12 +255,12 @@ class ExponentialEngine:
     name = "exponential"
 
     def __init__(self, *, kernel, gamma, nu, rule="trapezoid", formulation="displacement",
-                 lag=0, window=None, chunk=256):
+                 lag=0, window=None, chunk=256, threads=1, nsteps=None):
         if window is not None:
             raise InputError("numerics.window",
                              "the exponential history engine keeps the whole (untruncated) history and "
                              "does not support a window; use engine='direct' for a windowed history")
-        if rule not in RULES or rule not in _SUPPORTED_RULES:
+        if rule not in _SUPPORTED_RULES:
             raise ValueError(f"rule must be one of {_SUPPORTED_RULES}, got {rule!r}")
         if formulation not in FORMULATIONS:
             raise ValueError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}")
@@ -180,26 +273,33 @@ class ExponentialEngine:
         self.gamma = np.asarray(gamma, dtype=float).ravel()
         if not np.all(np.isfinite(self.gamma)) or np.any(self.gamma < 0):
             raise ValueError("gamma must be finite and >= 0")
-        self.fit = get_fit(kernel, nu, formulation)
+        gmax = float(self.gamma.max()) if self.gamma.size else 0.0
+        # the run needs the kernel on [T0, gamma_max (nsteps + 2)] only (None: the whole half line)
+        T_end = None if nsteps is None or gmax == 0 else gmax * (int(nsteps) + 2)
+        self.fit = get_fit(kernel, nu, formulation, T0=ENGINE_T0, T_end=T_end)
+        self._n_max = math.inf if not math.isfinite(self.fit.T_end) or gmax == 0 else self.fit.T_end / gmax
         self.T0 = self.fit.T0
         self.pairs = self.fit.pairs
         self.backend = _backend_choice()
+        self.threads = int(threads or 1)
         self.n = 0
 
         ug, inv = np.unique(self.gamma, return_inverse=True)
         self._ug, self._inv = ug, inv
-        jd_u = direct_taps(ug, self.lag, self.T0)
+        self._shift = shift = _SHIFT.get(rule, 0)
+        jd_u = direct_taps(ug, self.lag, self.T0, extra=shift)
         self._jd_u = jd_u
         self._j0_u = jd_u + self.lag  # first fitted weight index
         lam, c = self.fit.lam, self.fit.coef
         z = ug[:, None] * lam[None, :]
         rho_u = np.exp(z)
-        cf_u = c[None, :] * _rule_factor(rule, z)  # weight of cell k: 2 Re sum cf rho^k
-        e_u = 2.0 * cf_u * np.exp(z * self._j0_u[:, None])  # S_tail = Re sum_p e_p s_p
+        cf_u = c[None, :] * _rule_factor(rule, z)  # weight of cell k: 2 Re sum cf rho^(k - shift)
+        e_u = 2.0 * cf_u * np.exp(z * (self._j0_u[:, None] - shift))  # S_tail = Re sum_p e_p s_p
         zero = ug == 0
         # q = 0: every weight beyond the first is K(0)
-        self._k0_zero = k0 = float(convolution_weights(kernel, 0.0, self.lag + 1, nu=nu, rule=rule,
-                                                       formulation=formulation))
+        exact = dict(nu=nu, rule=rule, formulation=formulation)
+        self._exact = exact
+        self._k0_zero = k0 = float(_exact_weights(kernel, 0.0, self.lag + 1, **exact))
         if np.any(zero):
             # one running-sum state, the others switched off
             rho_u[zero] = 0.0
@@ -213,8 +313,13 @@ class ExponentialEngine:
             self._wstart_u[1:] = np.cumsum(jd_u)[:-1]
         uu = np.repeat(np.arange(ug.size), jd_u)
         jj = np.arange(uu.size) - self._wstart_u[uu]
-        self._wflat = np.asarray(convolution_weights(kernel, ug[uu], jj + self.lag, nu=nu, rule=rule,
-                                                     formulation=formulation), dtype=float).ravel()
+        self._wflat = np.asarray(_exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel()
+        if rule == "product":  # start-up term E_0(n): exact for n < J0, fitted beyond
+            self._e0flat = np.asarray(_exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact),
+                                      dtype=float).ravel()
+            self._e0c = 2.0 * c[None, :] * _start_factor(z)
+            self._e0c[zero] = 0.0
+            self._e0pow = None
         # weight() cache: powers rho^k for the last k asked
         self._wk = None
         self._wpow = None
@@ -224,18 +329,36 @@ class ExponentialEngine:
         m = self.gamma.size
         if self.backend == "numba":
             self._push_nb = _get_numba()
+            B = BLOCK
             order = np.argsort(inv, kind="stable")
             us = inv[order].astype(np.int64)
             self._order, self._us = order.astype(np.int64), us
-            self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
-            jd_sorted = jd_u[us]
+            self._L_u = np.ascontiguousarray(jd_u + B, dtype=np.int64)
+            # taps per unique gamma: exact w_{lag+j} (j < Jd), then the fitted weights of the
+            # partial block, Re sum_p e_p rho_p^i (i < B - 1)
+            pw = e_u[:, None, :] * rho_u[:, None, :] ** np.arange(B - 1)[None, :, None]
+            wfit = pw.sum(axis=2).real  # (U, B - 1)
+            self._wtstart_u = np.zeros(ug.size, dtype=np.int64)
+            if ug.size:
+                self._wtstart_u[1:] = np.cumsum(self._L_u - 1)[:-1]
+            wt = np.empty(int((self._L_u - 1).sum()))
+            for u in range(ug.size):
+                a = self._wtstart_u[u]
+                J = int(jd_u[u])
+                wt[a:a + J] = self._wflat[self._wstart_u[u]:self._wstart_u[u] + J]
+                wt[a + J:a + J + B - 1] = wfit[u]
+            self._wt = wt
+            L_sorted = self._L_u[us]
             self._start = np.zeros(m, dtype=np.int64)
             if m:
-                self._start[1:] = np.cumsum(jd_sorted)[:-1]
-            self._buf = np.zeros(int(jd_sorted.sum()), dtype=complex)
-            self._rho = np.ascontiguousarray(rho_u)
-            self._coef = np.ascontiguousarray(e_u)
-            self._sig = np.zeros((m, 2, self.pairs), dtype=complex)
+                self._start[1:] = np.cumsum(L_sorted)[:-1]
+            self._buf = np.zeros(int(L_sorted.sum()), dtype=complex)
+            self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
+            self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
+            self._sr = np.zeros((m, 2, self.pairs))
+            self._si = np.zeros((m, 2, self.pairs))
+            self._yr = np.zeros((m, B))
+            self._yi = np.zeros((m, B))
         else:
             # permute the modes so that each level of Jd is a contiguous block
             jd = jd_u[inv]
@@ -271,8 +394,8 @@ class ExponentialEngine:
     def nbytes(self) -> int:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
-            arrs = [self._buf, self._wflat, self._rho, self._coef, self._sig, self._order, self._us,
-                    self._start]
+            arrs = [self._buf, self._wflat, self._wt, self._rr, self._ri, self._er, self._ei, self._sr,
+                    self._si, self._yr, self._yi, self._order, self._us, self._start]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -282,14 +405,14 @@ class ExponentialEngine:
     def state_shapes(self) -> list:
         """Shapes of every state array (for checking that nothing grows with n)."""
         if self.backend == "numba":
-            arrs = [self._buf, self._rho, self._coef, self._sig]
+            arrs = [self._buf, self._rr, self._er, self._sr, self._si, self._yr]
         else:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
         return [a.shape for a in arrs]
 
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
-            return {"buf": self._buf, "sig": self._sig}
+            return {"buf": self._buf, "sr": self._sr, "si": self._si, "yr": self._yr, "yi": self._yi}
         out = {"sig": self._sig}
         for i, g in enumerate(self._groups):
             out[f"buf{i}"] = g[3]
@@ -317,10 +440,15 @@ class ExponentialEngine:
         if x.size != self.gamma.size:
             raise ValueError(f"x has {x.size} values, expected {self.gamma.size}")
         n = self.n
+        if n > self._n_max:
+            raise RuntimeError(f"the exponential engine was built for T <= {self.fit.T_end:g} "
+                               f"({int(self._n_max)} steps); step {n} is beyond its fitted range")
         if self.backend == "numba":
             out = np.empty(x.size, dtype=complex)
-            self._push_nb(x, n, self._order, self._us, self._start, self._jd_u_i, self._wstart_u,
-                          self._wflat, self._buf, self._rho, self._coef, self._sig, out)
+            _set_threads(self.threads)
+            self._push_nb(x, n, self._order, self._us, self._start, self._L_u, self._wtstart_u, self._wt,
+                          self._buf, self._rr, self._ri, self._er, self._ei, self._sr, self._si,
+                          self._yr, self._yi, out)
             self.n = n + 1
             return out.reshape(self.shape)
         xp, xin, S = self._xp, self._xin, self._S
@@ -342,6 +470,34 @@ class ExponentialEngine:
         out[self._perm] = S
         self.n = n + 1
         return out.reshape(self.shape)
+
+    def start_weight(self, n: int) -> np.ndarray:
+        """E_0(n) of the product rule (the start-up term on x_0), for every mode (n >= lag).
+
+        Exact for n < J0, from the fit beyond: 2 Re sum_p c_p E(z_p) rho_p^n with
+        E(z) = -(e^z - 1 - z)/z^2, the powers updated by one multiplication per call.
+        """
+        if self.rule != "product":
+            raise ValueError("start_weight is defined for the product rule only")
+        n = int(n)
+        if n < self.lag:
+            raise ValueError(f"n must be >= lag = {self.lag}, got {n}")
+        ug = self._ug
+        out = np.empty(ug.shape)
+        direct = n < self._j0_u
+        out[direct] = self._e0flat[self._wstart_u[direct] + n - self.lag]
+        fitted = ~direct & (ug > 0)
+        out[~direct & (ug == 0)] = float(_exact_weights(self.kernel, 0.0, n, part="start0", **self._exact))
+        if np.any(fitted):
+            if self._e0pow is not None and n == self._e0n + 1 and n % _RESYNC:
+                self._e0pow *= self._e0rho
+            else:
+                z = ug[:, None] * self.fit.lam[None, :]
+                self._e0rho = np.exp(z)
+                self._e0pow = np.exp(z * n)
+            self._e0n = n
+            out[fitted] = np.einsum("up,up->u", self._e0c[fitted], self._e0pow[fitted]).real
+        return out[self._inv].reshape(self.shape)
 
     def weight(self, j: int) -> np.ndarray:
         """w_{j+lag} for every mode, as applied by push() (no kernel evaluation: O(P) per mode).
@@ -367,7 +523,7 @@ class ExponentialEngine:
             else:
                 z = ug[:, None] * self.fit.lam[None, :]
                 self._wrho = np.exp(z)
-                self._wpow = np.exp(z * k)
+                self._wpow = np.exp(z * (k - self._shift))
             self._wk = k
             out[fitted] = 2.0 * np.einsum("up,up->u", self._cf_u[fitted], self._wpow[fitted]).real
         return out[self._inv].reshape(self.shape)

@@ -133,6 +133,7 @@ class ExpFit:
     k0: float
     orders: tuple
     scale: float = math.nan
+    T_end: float = math.inf
 
     @property
     def pairs(self) -> int:
@@ -222,11 +223,13 @@ def _lowrank_factor(M, rtol=1e-15):
 class _Reducer:
     """Log-weighted balanced truncation of g(T) = sum_k w_k exp(-x_k T), T >= T0."""
 
-    def __init__(self, x, w, T0):
+    def __init__(self, x, w, T0, T_end=math.inf):
         self.x = x
         bb = w * np.exp(-x * T0 / 2.0)
         z = x[:, None] + x[None, :]
         G = sp.exp1(z * (T0 / 4.0))
+        if math.isfinite(T_end):  # log weight on [T0/4, 2 T_end] only
+            G = G - sp.exp1(z * (2.0 * T_end))
         lp = _lowrank_factor(G * (bb[:, None] * bb.conj()[None, :]))
         lq = _lowrank_factor(G.astype(complex))
         U, s, Vh = np.linalg.svd(lq.conj().T @ lp)
@@ -260,13 +263,13 @@ def _sum_exp(lam, coef, T, chunk=4096):
 class _Cut:
     """One branch cut: the quadrature sum g_b and its reductions of increasing order."""
 
-    def __init__(self, b, x, w, T0, T1, T_check):
+    def __init__(self, b, x, w, T0, T1, T_check, T_end=math.inf):
         self.b, self.x, self.w = b, x, w
         self.T = _samples(T0, T1, _PER_DECADE)
         self.g = _sum_exp(-x + 0j, w, self.T)
         self.T_check = T_check
         self.g_check = _sum_exp(-x + 0j, w, T_check)
-        self.red = _Reducer(x, w, T0)
+        self.red = _Reducer(x, w, T0, T_end)
         self._fits = {}
 
     def fit(self, r):
@@ -292,15 +295,20 @@ _T_CHECK_END = 1e14
 
 
 def _check_grid(T0, T_end=_T_CHECK_END):
-    """Dense over [T0, 200] (step 0.05), log-spaced to T_end, and a dense stretch before 1e5."""
-    return np.unique(np.concatenate([np.arange(T0, 200.0, 0.05), _samples(T0, T_end, 4 * _PER_DECADE),
-                                     np.arange(1e5 - 50.0, 1e5, 0.25)]))
+    """Dense over [T0, 200] (step 0.05), log-spaced to T_end, and a dense stretch of 50 before
+    1e5 (whole half line) or before T_end (a finite range)."""
+    last = 1e5 if T_end == _T_CHECK_END else T_end
+    return np.unique(np.concatenate([np.arange(T0, min(200.0, T_end), 0.05),
+                                     _samples(T0, T_end, 4 * _PER_DECADE),
+                                     np.arange(max(T0, last - 50.0), last, 0.25), [T_end]]))
 
 
 def fit_kernel(kernel, *, nu=0.25, formulation="displacement", T0=DEFAULT_T0, tol=None,
-               T_fit=T_FIT):
+               T_fit=T_FIT, T_end=math.inf):
     """Fit K (C or Z of ``kernel``) on [T0, inf) with absolute error <= tol * scale (module doc).
 
+    ``T_end`` (finite) restricts the representation to [T0, T_end], the range a run of known
+    length uses: the reduction weights, the samples and the checks stop there.
     The orders of the cuts start where each cut alone is within ``tol scale / 4`` and
     the cut with the larger error is raised until the combined error
     2 |Re sum_b exp(i b T) (g_b,fit - g_b)| is within ``tol scale / 2`` on the check grid;
@@ -315,8 +323,10 @@ def fit_kernel(kernel, *, nu=0.25, formulation="displacement", T0=DEFAULT_T0, to
     k0 = _kernel_at_zero(kernel, nu, formulation)
     scale = _scale(kernel, nu, formulation)
     target = 0.5 * tol * scale
-    Tc = _check_grid(T0)
-    cuts = [_Cut(b, x, w, T0, T_fit, Tc)
+    T_end = float(T_end)
+    finite = math.isfinite(T_end)
+    Tc = _check_grid(T0, T_end if finite else _T_CHECK_END)
+    cuts = [_Cut(b, x, w, T0, T_end if finite else T_fit, Tc, T_end)
             for b, x, w in cut_quadrature(kernel, nu=nu, formulation=formulation)]
     orders = [c.smallest(_CUT_SHARE * 2.0 * tol * scale) for c in cuts]
     while True:
@@ -328,12 +338,13 @@ def fit_kernel(kernel, *, nu=0.25, formulation="displacement", T0=DEFAULT_T0, to
         orders[worst] += 1
     lam = np.concatenate([c.fit(r)[0] + 1j * c.b for c, r in zip(cuts, orders)])
     coef = np.concatenate([c.fit(r)[1] for c, r in zip(cuts, orders)])
-    fit = ExpFit(kernel, nu, formulation, T0, float(tol), lam, coef, math.nan, k0, tuple(orders), scale)
+    fit = ExpFit(kernel, nu, formulation, T0, float(tol), lam, coef, math.nan, k0, tuple(orders), scale,
+                 T_end)
     err = check_fit(fit)
     if not err <= tol * scale:
         raise RuntimeError(f"exponential fit of {kernel}/{formulation} (nu={nu}) reached only "
                            f"{err / scale:.3g} of the kernel scale (target {tol})")
-    return ExpFit(kernel, nu, formulation, T0, float(tol), lam, coef, err, k0, tuple(orders), scale)
+    return ExpFit(kernel, nu, formulation, T0, float(tol), lam, coef, err, k0, tuple(orders), scale, T_end)
 
 
 def _scale(kernel, nu, formulation):
@@ -367,7 +378,9 @@ def check_fit(fit: ExpFit, T=None):
     terms beyond the grid is added (|K| itself is below 1e-7 there).
     """
     tail = 0.0
-    if T is None:
+    if T is None and math.isfinite(fit.T_end):
+        T = _check_grid(fit.T0, fit.T_end)
+    elif T is None:
         T = _check_grid(fit.T0)
         tail = float(2.0 * np.sum(np.abs(fit.coef) * np.exp(fit.lam.real * _T_CHECK_END)))
     T = np.asarray(T, dtype=float)
@@ -395,9 +408,22 @@ def cache_dir() -> Path:
     return base / "cracklab"
 
 
-def _key(kernel, nu, formulation, T0, tol):
-    return (FIT_VERSION, kernel, float(nu).hex(), formulation, float(T0).hex(), float(tol).hex(),
-            float(T_FIT).hex(), _CUT_SHARE, _H, _UMIN, _UMAX)
+def _key(kernel, nu, formulation, T0, tol, T_end=math.inf):
+    key = (FIT_VERSION, kernel, float(nu).hex(), formulation, float(T0).hex(), float(tol).hex(),
+           float(T_FIT).hex(), _CUT_SHARE, _H, _UMIN, _UMAX)
+    return key if not math.isfinite(T_end) else key + (float(T_end).hex(),)
+
+
+#: a finite range is rounded up to a half decade (>= 1e3); beyond 1e8 the whole half line is fitted
+T_END_MIN, T_END_MAX = 1e3, 1e8
+
+
+def range_bucket(T_end) -> float:
+    """The fitted range used for a run that needs [T0, T_end]: a half decade at or above it."""
+    if T_end is None or not math.isfinite(T_end) or T_end > T_END_MAX:
+        return math.inf
+    b = 10.0 ** (math.ceil(2.0 * math.log10(max(float(T_end), T_END_MIN)) - 1e-9) / 2.0)
+    return math.inf if b > T_END_MAX else float(b)
 
 
 def _cache_path(key) -> Path:
@@ -405,7 +431,7 @@ def _cache_path(key) -> Path:
     return cache_dir() / f"expfit-v{FIT_VERSION}-{key[1]}-{key[3]}-{digest}.npz"
 
 
-def _load(path: Path, key, kernel, nu, formulation, T0, tol):
+def _load(path: Path, key, kernel, nu, formulation, T0, tol, T_end=math.inf):
     """The cached fit, or None if missing, unreadable, foreign or inaccurate."""
     try:
         with np.load(path, allow_pickle=False) as z:
@@ -423,9 +449,9 @@ def _load(path: Path, key, kernel, nu, formulation, T0, tol):
         return None
     k0 = _kernel_at_zero(kernel, nu, formulation)
     scale = _scale(kernel, nu, formulation)
-    fit = ExpFit(kernel, nu, formulation, T0, tol, lam, coef, err, k0, orders, scale)
+    fit = ExpFit(kernel, nu, formulation, T0, tol, lam, coef, err, k0, orders, scale, T_end)
     # cheap spot check against the kernel itself (catches silent corruption)
-    T = np.concatenate([np.linspace(T0, 60.0, 400), np.geomspace(60.0, 1e6, 200)])
+    T = np.concatenate([np.linspace(T0, 60.0, 400), np.geomspace(60.0, min(1e6, T_end), 200)])
     if not np.abs(evaluate(fit, T) - _kernel(kernel, T, nu, formulation)).max() <= tol * scale:
         return None
     return fit
@@ -456,16 +482,18 @@ def _store(path: Path, key, fit: ExpFit):
 
 
 def get_fit(kernel, nu=0.25, formulation="displacement", *, T0=DEFAULT_T0, tol=None,
-            use_disk=True) -> ExpFit:
+            use_disk=True, T_end=None) -> ExpFit:
     """The exponential fit of (kernel, nu, formulation), from memory, disk, or computed.
 
-    ``tol`` defaults to ``DEFAULT_TOL[kernel]``.
+    ``tol`` defaults to ``DEFAULT_TOL[kernel]``.  ``T_end``: the largest T the caller needs
+    (None: the whole half line); the fit covers :func:`range_bucket` (T_end).
     """
     _check(kernel, formulation)
     _k.wave_speed_ratio(nu)  # validates nu
     tol = DEFAULT_TOL[kernel] if tol is None else tol
     nu, T0, tol = float(nu), float(T0), float(tol)
-    key = _key(kernel, nu, formulation, T0, tol)
+    T_end = range_bucket(T_end)
+    key = _key(kernel, nu, formulation, T0, tol, T_end)
     with _LOCK:
         fit = _MEMORY.get(key)
     if fit is not None:
@@ -477,9 +505,9 @@ def get_fit(kernel, nu=0.25, formulation="displacement", *, T0=DEFAULT_T0, tol=N
         except Exception:  # no usable home directory: memory cache only
             path = None
     if path is not None:
-        fit = _load(path, key, kernel, nu, formulation, T0, tol)
+        fit = _load(path, key, kernel, nu, formulation, T0, tol, T_end)
     if fit is None:
-        fit = fit_kernel(kernel, nu=nu, formulation=formulation, T0=T0, tol=tol)
+        fit = fit_kernel(kernel, nu=nu, formulation=formulation, T0=T0, tol=tol, T_end=T_end)
         if path is not None:
             _store(path, key, fit)
     with _LOCK:
