@@ -87,6 +87,13 @@ class Response:
             self.channels["III"] = channel("III")
         self.n = 0
 
+    @classmethod
+    def for_scene(cls, scene, transforms=None):
+        """The response a run of ``scene`` uses (its scheme, engine, window and length)."""
+        return cls(scene.material, scene.grid, scene.dt, scene.components, formulation=scene.formulation,
+                   engine=scene.numerics.engine, window=scene.numerics.window, transforms=transforms,
+                   nsteps=scene.nsteps)
+
     # -- state (checkpoints) -----------------------------------------------------------
     def get_state(self) -> dict:
         """The dynamic state: step count, per-channel start-up and product-scheme terms, engines."""

@@ -50,12 +50,12 @@ def wave(grid, i1, i3):
     return np.cos(k * x1 + m * x3), k, m
 
 
-def scene(grid, loading, beta, *, fields, formulation="displacement", window=None,
+def scene(grid, loading, beta, *, fields, formulation="displacement", window=None, engine="direct",
           nsteps=NSTEPS, law=None):
     dt = beta * grid.dx_min / MAT.cs
     return Scene(material=MAT, grid=grid, law=law or TractionFree(), loading=loading,
                  t_end=nsteps * dt, beta=beta, record=Record(fields=fields, every=1),
-                 numerics=Numerics(formulation=formulation, window=window))
+                 numerics=Numerics(formulation=formulation, window=window, engine=engine))
 
 
 def modal(mode, gamma, nsteps, formulation):

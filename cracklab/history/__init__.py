@@ -13,8 +13,16 @@ from .exponential import ExponentialEngine
 ENGINES = {"direct": DirectEngine, "exponential": ExponentialEngine}
 
 
+def resolve_engine(name: str, window=None) -> str:
+    """"auto": the exponential engine (flat cost per step), or the direct one for a windowed history."""
+    if name == "auto":
+        return "direct" if window is not None else "exponential"
+    return name
+
+
 def make_engine(name: str, **kwargs):
-    """Build the history engine called ``name`` (see ``ENGINES``)."""
+    """Build the history engine called ``name`` (see ``ENGINES``; "auto": :func:`resolve_engine`)."""
+    name = resolve_engine(name, kwargs.get("window"))
     try:
         cls = ENGINES[name]
     except KeyError:
@@ -24,4 +32,4 @@ def make_engine(name: str, **kwargs):
     return cls(**kwargs)
 
 
-__all__ = ["DirectEngine", "ENGINES", "ExponentialEngine", "make_engine"]
+__all__ = ["DirectEngine", "ENGINES", "ExponentialEngine", "make_engine", "resolve_engine"]

@@ -217,6 +217,39 @@ def _numba_push():
     return push
 
 
+def _power_sum_numpy(pw, rho, coef, factor, out):
+    pw *= rho
+    out[:] = factor * np.einsum("up,up->u", coef, pw).real
+
+
+def _make_power_sum():
+    """pw *= rho; out = factor Re sum_p coef pw, per unique gamma (numba, numpy fallback)."""
+    try:
+        import numba
+    except Exception:  # pragma: no cover
+        return _power_sum_numpy
+
+    @numba.njit(cache=True, nogil=True, parallel=True)
+    def power_sum(pw, rho, coef, factor, out):
+        for u in numba.prange(pw.shape[0]):
+            acc = 0.0
+            for p in range(pw.shape[1]):
+                v = pw[u, p] * rho[u, p]
+                pw[u, p] = v
+                acc += coef[u, p].real * v.real - coef[u, p].imag * v.imag
+            out[u] = factor * acc
+
+    return power_sum
+
+
+def _power_sum(pw, rho, coef, factor, out):
+    global _POWER_SUM
+    if _POWER_SUM is None:
+        _POWER_SUM = _make_power_sum() if _backend_choice() == "numba" else _power_sum_numpy
+    _POWER_SUM(pw, rho, coef, factor, out)
+
+
+_POWER_SUM = None
 _NUMBA = None
 
 
@@ -483,20 +516,20 @@ class ExponentialEngine:
         if n < self.lag:
             raise ValueError(f"n must be >= lag = {self.lag}, got {n}")
         ug = self._ug
-        out = np.empty(ug.shape)
+        if n < self.lag + 1 or self._e0pow is None or n != self._e0n + 1 or n % _RESYNC == 0:
+            z = ug[:, None] * self.fit.lam[None, :]
+            self._e0rho = np.exp(z)
+            self._e0pow = np.exp(z * n)
+            out = np.einsum("up,up->u", self._e0c, self._e0pow).real
+        else:
+            out = np.empty(ug.shape)
+            _power_sum(self._e0pow, self._e0rho, self._e0c, 1.0, out)
+        self._e0n = n
         direct = n < self._j0_u
         out[direct] = self._e0flat[self._wstart_u[direct] + n - self.lag]
-        fitted = ~direct & (ug > 0)
-        out[~direct & (ug == 0)] = float(_exact_weights(self.kernel, 0.0, n, part="start0", **self._exact))
-        if np.any(fitted):
-            if self._e0pow is not None and n == self._e0n + 1 and n % _RESYNC:
-                self._e0pow *= self._e0rho
-            else:
-                z = ug[:, None] * self.fit.lam[None, :]
-                self._e0rho = np.exp(z)
-                self._e0pow = np.exp(z * n)
-            self._e0n = n
-            out[fitted] = np.einsum("up,up->u", self._e0c[fitted], self._e0pow[fitted]).real
+        zero = ~direct & (ug == 0)
+        if np.any(zero):
+            out[zero] = float(_exact_weights(self.kernel, 0.0, n, part="start0", **self._exact))
         return out[self._inv].reshape(self.shape)
 
     def weight(self, j: int) -> np.ndarray:
@@ -510,20 +543,17 @@ class ExponentialEngine:
             raise ValueError(f"j must be >= 0, got {j}")
         k = j + self.lag
         ug = self._ug
-        out = np.empty(ug.shape)
+        self._wcalls += 1
+        if self._wk is not None and k == self._wk + 1 and self._wcalls % _RESYNC:
+            out = np.empty(ug.shape)
+            _power_sum(self._wpow, self._wrho, self._cf_u, 2.0, out)
+        else:
+            z = ug[:, None] * self.fit.lam[None, :]
+            self._wrho = np.exp(z)
+            self._wpow = np.exp(z * (k - self._shift))
+            out = 2.0 * np.einsum("up,up->u", self._cf_u, self._wpow).real
+        self._wk = k
         direct = j < self._jd_u
         out[direct] = self._wflat[self._wstart_u[direct] + j]
-        zero = (ug == 0) & ~direct
-        out[zero] = self._k0_zero
-        fitted = ~direct & ~zero
-        if np.any(fitted):
-            self._wcalls += 1
-            if self._wk is not None and k == self._wk + 1 and self._wcalls % _RESYNC:
-                self._wpow *= self._wrho
-            else:
-                z = ug[:, None] * self.fit.lam[None, :]
-                self._wrho = np.exp(z)
-                self._wpow = np.exp(z * (k - self._shift))
-            self._wk = k
-            out[fitted] = 2.0 * np.einsum("up,up->u", self._cf_u[fitted], self._wpow[fitted]).real
+        out[~direct & (ug == 0)] = self._k0_zero
         return out[self._inv].reshape(self.shape)
