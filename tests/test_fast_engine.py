@@ -313,3 +313,44 @@ def test_cache_concurrent_writers_and_unwritable_dir(tmp_cache, tmp_path, monkey
     F.clear_memory_cache()
     with pytest.warns(RuntimeWarning, match="cache"):
         assert F.get_fit("III", NU, "displacement").P == fit.P
+
+
+# ----------------------------------------------------------------------------- product scheme
+PRODUCT_CASES = [("II", g) for g in (0.1, 0.5, 1.0, 2.3)] + [("I", 0.5), ("I", 2.3), ("III", 0.5),
+                                                              ("III", 2.3)]
+
+
+@pytest.mark.parametrize("mode, gamma", PRODUCT_CASES)
+def test_product_scheme_single_wave_at_the_50th_rayleigh_period(mode, gamma):
+    """The default scheme for shear (product rule, predictor-corrector) on a plane grid:
+    one Fourier mode of gamma = q c_s dt with the exponential engine, against the
+    untruncated direct recurrence (cracklab.modal, which the direct engine reproduces to
+    1e-10, tests/test_product_scheme.py) over the 50th Rayleigh period, relative to the
+    long-time amplitude."""
+    from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree, modal_response, simulate
+
+    comp = {"I": 2, "II": 1, "III": 3}[mode]
+    n1 = 16
+    m = next(m for m in (1, 2, 4, 8) if gamma / (2 * math.pi * m / n1) <= 0.79)  # beta <= 0.79
+    grid = Grid(n1=n1, n3=1, L1=1.0, L3=1.0)
+    mat = Material(mu=1.0, cs=1.0, nu=NU)
+    beta = gamma / (2 * math.pi * m / n1)
+    T_end = 50 * 2 * math.pi / C_R
+    nsteps = int(math.ceil(T_end / gamma)) + 1
+    load = Loading(**{f"tau0_{comp}": np.cos(2 * math.pi * m * grid.x1)[:, None]})
+    sc = Scene(material=mat, grid=grid, law=TractionFree(), loading=load, beta=beta,
+               t_end=nsteps * beta * grid.dx1 * (1 - 1e-12),
+               record=Record(fields=(f"v_{comp}",), every=1),
+               numerics=Numerics(formulation="product", engine="exponential"))
+    r = {"exponential": simulate(sc)[f"v_{comp}"].values[:, 0, 0] * mat.eta(comp)}
+    g = 2 * math.pi * m / n1 * beta
+    r["direct"] = modal_response(mode, gamma=g, T_end=g * sc.nsteps, nu=NU, formulation="velocity",
+                                 convolution="product", integration="predictor-corrector").values
+    assert r["direct"].size == r["exponential"].size
+    T = np.arange(r["direct"].size) * gamma
+    win = (T > T_end - 2 * math.pi / C_R) & (T <= T_end)
+    ref = {"I": 0.5844, "II": 0.1566}.get(mode)
+    if ref is None:  # mode III has no Rayleigh wave: the J0 envelope, or the scheme's own amplitude
+        ref = max(np.sqrt(2.0 / (np.pi * T[win])).max(), np.abs(r["direct"][win]).max())
+    assert np.all(np.isfinite(r["exponential"]))
+    assert np.max(np.abs(r["exponential"][win] - r["direct"][win])) / ref <= 1e-3

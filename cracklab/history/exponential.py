@@ -1,30 +1,39 @@
 """Exponential-sum history engine: cost and memory per mode independent of the run length.
 
-The kernel K (C or Z, see :mod:`cracklab.weights`) is represented, for
-T = q c_s t >= T0, by ``K(T) ~ 2 Re sum_p c_p exp(lambda_p T)`` (conjugate pairs,
-Re lambda_p < 0, absolute error <= 1e-5 |K(0)| (5e-6 for mode II) on the whole half line
-T >= T0; :mod:`cracklab.history.fit`).  For a mode with gamma = q c_s dt the weights split at
-J0 = ceil(T0 / gamma) (rounded up to a small set of levels, and >= lag + 1):
+The kernel K (C or Z, see :mod:`cracklab.weights`) is represented, for T = q c_s t in
+[T0, T_end], by ``K(T) ~ 2 Re sum_p c_p exp(lambda_p T)`` (conjugate pairs, Re lambda_p < 0,
+absolute error <= 1e-5 of the kernel's scale (5e-6 for mode II); :mod:`cracklab.history.fit`).
+T0 = ``ENGINE_T0`` = 4; T_end covers the run (gamma_max times its number of steps, rounded up
+to a half decade; the whole half line when the length is not given): the kernel is never
+truncated inside the run.  For a mode with gamma = q c_s dt the weights split at
+J0 = ceil(T0 / gamma) (+1 for the product rule, whose weight w_k reaches back to (k - 1) gamma;
+rounded up to a small set of levels, and >= lag + 1):
 
-* k = j + lag < J0: the exact weights ``convolution_weights(kernel, gamma, k)`` against
-  a ring buffer of the last Jd = J0 - lag values of the mode ("direct taps");
+* k = j + lag < J0: the exact weights (:func:`cracklab.weights.convolution_weights`, or
+  :func:`cracklab.modal.product_weights`) against a ring buffer of the mode's recent values
+  ("direct taps");
 * k >= J0: the weight of the rule applied to the fitted kernel,
-  ``w_k = 2 Re sum_p c_p f_p rho_p^k`` with ``rho_p = exp(lambda_p gamma)`` and the
-  rule factor f_p (discretized 1, trapezoid (1 + rho)/2, Simpson, exact
-  (rho - 1)/(lambda gamma)), i.e. the pre-integration of eqs. (45)-(47) applied to
-  each exponential exactly.  The tail sum is carried by one complex state per term
-  and per real input (real and imaginary parts of x):
-  ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = 2 Re sum_p c_p f_p rho_p^J0 s_p``
-  (taken separately for the real and imaginary parts of x).
+  ``w_k = 2 Re sum_p c_p f_p rho_p^(k - shift)`` with ``rho_p = exp(lambda_p gamma)`` and the
+  rule factor f_p (discretized 1, trapezoid (1 + rho)/2, Simpson, exact (rho - 1)/(lambda gamma),
+  product ((rho - 1)/(lambda gamma))^2 with shift 1), i.e. eqs. (45)-(47) (or the product
+  integration of docs/stability.md) applied to each exponential exactly.  The tail sum is
+  carried by one complex state per term and per real input (Re x and Im x):
+  ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = Re sum_p e_p s_p``.
 
-Per mode and step this costs Jd real multiply-adds of the direct taps plus P complex
-multiply-adds (P exponentials with conjugates, P/2 states for each of Re x and Im x: 22
-for C_III, 68 for C_II, 70 for C_I at nu = 1/4), and the memory is fixed at construction.
-Modes with gamma = 0 (q = 0) get exact weights K(0) for all k (a running sum).
+The numba backend advances the states ``BLOCK`` = 8 steps at a time (Horner in registers),
+once every 8 steps per mode, staggered over the modes so that every step costs the same; in
+between, S_n adds the fitted weights of the steps since the last block update to the direct
+taps and reads the precomputed ``Re sum_p e_p rho_p^r s_p`` (r < 8).  The sum is the same as
+the per-step recursion (to round-off); the states are read and written once per block
+instead of once per step.  The numpy backend runs the per-step recursion.  The product
+rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
+
+Memory per mode is fixed at construction (about 2 P complex states, Jd + 8 buffered values,
+8 outputs).  Modes with gamma = 0 (q = 0) get exact weights K(0) for all k (a running sum).
 See docs/fast_engine.md.
 
-``window`` (a truncated history) is not supported: the engine keeps the whole
-history by construction; use the direct engine for windowed runs.
+``window`` (a truncated history) is not supported: the engine keeps the whole history by
+construction; use the direct engine for windowed runs.
 """
 from __future__ import annotations
 
