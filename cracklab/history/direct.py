@@ -117,13 +117,21 @@ class DirectEngine:
         self.n = n
 
     def weight(self, j: int) -> np.ndarray:
-        """w_j (lag included) for every mode."""
+        """w_j (lag included) for every mode (from the table push() built, when it holds j)."""
+        if j < self._w2.shape[0]:
+            return self._w2[j, 0::2].reshape(self.shape)
         return self._weights(j, j + 1)[0].reshape(self.shape)
 
     def start_weight(self, n: int) -> np.ndarray:
-        """E_0(n) of the product rule (the start-up term on x_0), for every mode."""
+        """E_0(n) of the product rule (the start-up term on x_0), for every mode.
+
+        Tabulated ``chunk`` values of n at a time per distinct gamma, so that consecutive
+        steps evaluate no kernel."""
         from ..modal import product_weights
 
-        e = product_weights(self.kernel, self._ug, np.full(self._ug.shape, n), nu=self.nu, order=1,
-                            part="start0")
-        return np.asarray(e)[self._inv].reshape(self.shape)
+        tab = getattr(self, "_e0tab", None)
+        if tab is None or not tab[0] <= n < tab[0] + tab[1].shape[0]:
+            nn = np.arange(n, n + self.chunk)[:, None]
+            e = product_weights(self.kernel, self._ug[None, :], nn, nu=self.nu, order=1, part="start0")
+            self._e0tab = tab = (n, np.asarray(e, dtype=float).reshape(self.chunk, -1))
+        return tab[1][n - tab[0]][self._inv].reshape(self.shape)
