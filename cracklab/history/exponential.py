@@ -20,12 +20,13 @@ rounded up to a small set of levels, and >= lag + 1):
   carried by one complex state per term and per real input (Re x and Im x):
   ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = Re sum_p e_p s_p``.
 
-The numba backend advances the states ``BLOCK`` = 8 steps at a time (Horner in registers),
-once every 8 steps per mode, staggered over the modes so that every step costs the same; in
-between, S_n adds the fitted weights of the steps since the last block update to the direct
-taps and reads the precomputed ``Re sum_p e_p rho_p^r s_p`` (r < 8).  The sum is the same as
-the per-step recursion (to round-off); the states are read and written once per block
-instead of once per step.  The numpy backend runs the per-step recursion.  The product
+Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the per-step recursion in one
+parallel pass over the modes; "numba-block" advances the states ``BLOCK`` = 8 steps at a
+time (once every 8 steps per mode, staggered over the modes; in between, S_n adds the
+fitted weights of the steps since the last block update to the direct taps and reads the
+precomputed ``Re sum_p e_p rho_p^r s_p``, r < 8), which reads and writes the states once
+per block but measured 10-15 % slower here (docs/performance.md); "numpy" runs the
+per-step recursion vectorised over the modes.  All three give the same sums to round-off.  The product
 rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
 
 Memory per mode is fixed at construction (about 2 P complex states, Jd + 8 buffered values,
@@ -226,6 +227,55 @@ def _numba_push():
     return push
 
 
+def _numba_step():
+    """The per-step recursion in one parallel numba pass (None if numba is unavailable)."""
+    try:
+        import numba
+    except Exception:  # pragma: no cover
+        return None
+
+    @numba.njit(cache=True, nogil=True, parallel=True)
+    def step(x, n, order, us, start, jd_u, wstart_u, w, buf, rho_u, coef_u, sig, out):
+        """s_p <- rho_p s_p + x_{n-Jd} and S_n = taps + Re sum_p e_p s_p, every mode, every step."""
+        m_all = order.size
+        ph = rho_u.shape[1]
+        for c in numba.prange(_CHUNKS):
+            for i in range(c * m_all // _CHUNKS, (c + 1) * m_all // _CHUNKS):
+                m = order[i]
+                u = us[i]
+                J = jd_u[u]
+                b0 = start[i]
+                w0 = wstart_u[u]
+                p = n % J
+                old = buf[b0 + p]
+                buf[b0 + p] = x[m]
+                accr = 0.0
+                acci = 0.0
+                k = p
+                for j in range(J):  # direct taps: w_{lag+j} x_{n-j}
+                    v = buf[b0 + k]
+                    wj = w[w0 + j]
+                    accr += wj * v.real
+                    acci += wj * v.imag
+                    k -= 1
+                    if k < 0:
+                        k += J
+                xr = old.real  # x_{n-Jd} enters the recursive states
+                xi = old.imag
+                for q in range(ph):
+                    r = rho_u[u, q]
+                    cq = coef_u[u, q]
+                    s0 = r * sig[i, 0, q] + xr
+                    s1 = r * sig[i, 1, q] + xi
+                    sig[i, 0, q] = s0
+                    sig[i, 1, q] = s1
+                    accr += cq.real * s0.real - cq.imag * s0.imag
+                    acci += cq.real * s1.real - cq.imag * s1.imag
+                out[m] = complex(accr, acci)
+
+    return step
+
+
 def _power_sum_numpy(pw, rho, coef, factor, out):
     pw *= rho
     out[:] = factor * np.einsum("up,up->u", coef, pw).real
@@ -254,7 +304,7 @@ def _make_power_sum():
 def _power_sum(pw, rho, coef, factor, out):
     global _POWER_SUM
     if _POWER_SUM is None:
-        _POWER_SUM = _make_power_sum() if _backend_choice() == "numba" else _power_sum_numpy
+        _POWER_SUM = _make_power_sum() if _backend_choice() != "numpy" else _power_sum_numpy
     _POWER_SUM(pw, rho, coef, factor, out)
 
 
@@ -275,9 +325,20 @@ def _set_threads(threads):
     numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
 
 
+_STEP = None
+
+
+def _get_step():
+    global _STEP
+    if _STEP is None:
+        _STEP = _numba_step()
+    return _STEP
+
+
 def _backend_choice():
+    """"numba" (per-step loop, the default), "numba-block" (blocked loop) or "numpy"."""
     env = os.environ.get("CRACKLAB_EXP_BACKEND", "").strip().lower()
-    if env in ("numpy", "numba"):
+    if env in ("numpy", "numba", "numba-block"):
         return env
     return "numba" if _get_numba() is not None else "numpy"
 
@@ -370,6 +431,20 @@ class ExponentialEngine:
 
         m = self.gamma.size
         if self.backend == "numba":
+            self._push_nb = _get_step()
+            order = np.argsort(inv, kind="stable")
+            us = inv[order].astype(np.int64)
+            self._order, self._us = order.astype(np.int64), us
+            self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
+            jd_sorted = jd_u[us]
+            self._start = np.zeros(m, dtype=np.int64)
+            if m:
+                self._start[1:] = np.cumsum(jd_sorted)[:-1]
+            self._buf = np.zeros(int(jd_sorted.sum()), dtype=complex)
+            self._rho = np.ascontiguousarray(rho_u)
+            self._coef = np.ascontiguousarray(e_u)
+            self._sig = np.zeros((m, 2, self.pairs), dtype=complex)
+        elif self.backend == "numba-block":
             self._push_nb = _get_numba()
             B = BLOCK
             order = np.argsort(inv, kind="stable")
@@ -436,6 +511,9 @@ class ExponentialEngine:
     def nbytes(self) -> int:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
+            arrs = [self._buf, self._wflat, self._rho, self._coef, self._sig, self._order, self._us,
+                    self._start]
+        elif self.backend == "numba-block":
             arrs = [self._buf, self._wflat, self._wt, self._rr, self._ri, self._er, self._ei, self._sr,
                     self._si, self._yr, self._yi, self._order, self._us, self._start]
         else:
@@ -447,6 +525,8 @@ class ExponentialEngine:
     def state_shapes(self) -> list:
         """Shapes of every state array (for checking that nothing grows with n)."""
         if self.backend == "numba":
+            arrs = [self._buf, self._rho, self._coef, self._sig]
+        elif self.backend == "numba-block":
             arrs = [self._buf, self._rr, self._er, self._sr, self._si, self._yr]
         else:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
@@ -454,6 +534,8 @@ class ExponentialEngine:
 
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
+            return {"buf": self._buf, "sig": self._sig}
+        if self.backend == "numba-block":
             return {"buf": self._buf, "sr": self._sr, "si": self._si, "yr": self._yr, "yi": self._yi}
         out = {"sig": self._sig}
         for i, g in enumerate(self._groups):
@@ -486,6 +568,13 @@ class ExponentialEngine:
             raise RuntimeError(f"the exponential engine was built for T <= {self.fit.T_end:g} "
                                f"({int(self._n_max)} steps); step {n} is beyond its fitted range")
         if self.backend == "numba":
+            out = np.empty(x.size, dtype=complex)
+            _set_threads(self.threads)
+            self._push_nb(x, n, self._order, self._us, self._start, self._jd_u_i, self._wstart_u,
+                          self._wflat, self._buf, self._rho, self._coef, self._sig, out)
+            self.n = n + 1
+            return out.reshape(self.shape)
+        if self.backend == "numba-block":
             out = np.empty(x.size, dtype=complex)
             _set_threads(self.threads)
             self._push_nb(x, n, self._order, self._us, self._start, self._L_u, self._wtstart_u, self._wt,
