@@ -61,7 +61,7 @@ SEED_BITS = 53          # seeds fit exactly in float64, int64 and JSON numbers
 
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",
            "run_study", "open_ensemble", "open_member", "member_status", "member_scene",
-           "build_scene", "is_ensemble", "coordinate_name", "export_netcdf", "store_lock",
+           "build_scene", "is_ensemble", "store_kind", "coordinate_name", "export_netcdf", "store_lock",
            "StoreLocked"]
 
 
@@ -473,6 +473,31 @@ def is_ensemble(store) -> bool:
     return "cracklab_ensemble" in root.attrs
 
 
+def store_kind(store) -> str:
+    """"ensemble" or "run" for a cracklab store; an InputError naming ``store`` for
+    anything else (no such path, a file, a directory or Zarr group that cracklab did
+    not write, an ensemble store of a newer format)."""
+    s = _store_str(store)
+    if "://" not in s and not Path(s).exists():
+        raise InputError("store", f"{s} does not exist")
+    try:
+        root = _open_group(s, "r")
+    except Exception:  # noqa: BLE001 - reported as one clear line
+        raise InputError("store", f"{s} is not a Zarr store (no Zarr group there); expected a cracklab "
+                                  f"run or ensemble store") from None
+    attrs = dict(root.attrs)
+    if "cracklab_ensemble" in attrs:
+        fmt = attrs["cracklab_ensemble"]
+        if not isinstance(fmt, int) or isinstance(fmt, bool) or fmt > FORMAT:
+            raise InputError("store", f"{s} is an ensemble store of format {fmt!r}; this cracklab reads "
+                                      f"format {FORMAT} (written by another cracklab version)")
+        return "ensemble"
+    if isinstance(attrs.get("scene"), str):
+        return "run"
+    raise InputError("store", f"{s} is a Zarr group but not a cracklab run or ensemble store "
+                              f"(no 'scene' or 'cracklab_ensemble' attribute)")
+
+
 def _check_store(store: str):
     """Refuse, before anything is written, a path that cannot become or be an ensemble
     store: a file, a non-empty directory that is not a Zarr group, a Zarr group that is
@@ -509,7 +534,6 @@ def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
     """Create (or reopen) the root group and members/; record the study and member order."""
     _check_store(store)
     root = _open_group(store, "a")
-    root.require_group(MEMBERS)
     old = list(root.attrs.get("members", []))
     ids = old + [m.id for m in members if m.id not in set(old)]
     root.attrs.update({
@@ -519,6 +543,7 @@ def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
         "members": ids,
         "axes": json.dumps(list(axes)),
     })
+    root.require_group(MEMBERS)
     return root
 
 
@@ -797,6 +822,9 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                         r = {"id": m.id, "status": "failed", "error": _error_line(exc),
                              "traceback": _traceback_summary(exc)}
                         _record_failure(store, m, r["error"], r["traceback"])
+                    # forget the task at once: were the worker that holds its (small) result
+                    # to die later, dask would otherwise run the member again and rewrite it
+                    fut.release()
                     if r["status"] != "complete":
                         result.failed[m.id] = r.get("error", "failed")
                     bar.update(1)
@@ -808,6 +836,11 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                 raise
             finally:
                 bar.close()
+    for m in todo:      # what the result says complete is complete in the store
+        if m.id not in result.failed and not _is_complete(store, m.id):
+            error = "IncompleteMember: the member's group is not marked complete after the run"
+            _record_failure(store, m, error, "")
+            result.failed[m.id] = error
     result.elapsed = time.perf_counter() - t0
     _open_group(store, "a").attrs.update({"last_run": json.dumps({
         "members": len(members), "ran": len(todo), "skipped": len(result.skipped),
@@ -909,9 +942,9 @@ def member_status(store) -> list[dict]:
     """One dict per member group in the store (plan order): id, status, complete, params,
     swept, error, traceback, elapsed_s."""
     store = _store_str(store)
+    if store_kind(store) != "ensemble":
+        raise InputError("store", f"{store} is not a cracklab ensemble store (it is a single run)")
     root = _open_group(store, "r")
-    if "cracklab_ensemble" not in root.attrs:
-        raise InputError("store", f"{store} is not a cracklab ensemble store")
     ids = list(root.attrs.get("members", []))
     present = sorted(root[MEMBERS].group_keys()) if MEMBERS in root else []
     order = [i for i in ids if i in set(present)] + [i for i in present if i not in set(ids)]
@@ -1125,7 +1158,9 @@ def export_netcdf(store, out, *, member=None):
     import xarray as xr
 
     store = _store_str(store)
-    if is_ensemble(store):
+    if store_kind(store) == "ensemble":
+        if member and member not in {st["id"] for st in member_status(store)}:
+            raise InputError("member", f"{member!r} is not a member of {store}")
         ds = open_member(store, member) if member else open_ensemble(store)
         if member:
             ds.attrs["member_id"] = member

@@ -8,6 +8,10 @@ import numpy as np
 from .errors import InputError, check_positive
 
 
+MAX_NODES_PER_AXIS = 2**16
+MAX_NODES = 2**26
+
+
 def is_fast_size(n: int) -> bool:
     """True when n factors into 2, 3, 5 and 7 only (sizes FFTW and pocketfft do fast)."""
     if n < 1:
@@ -27,10 +31,10 @@ def next_fast_size(n: int) -> int:
 
 def _check_size(field: str, n) -> int:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise InputError(field, f"must be an integer, got {n!r}")
+        raise InputError(field, f"must be an integer (an even fast FFT size 2^a 3^b 5^c 7^d >= 2), got {n!r}")
     n = int(n)
     if n < 1:
-        raise InputError(field, f"must be >= 1, got {n}")
+        raise InputError(field, f"must be an integer >= 1 (an even fast FFT size, or 1 for n3), got {n}")
     return n
 
 
@@ -58,8 +62,16 @@ class Grid:
                     f"must be an even fast FFT size (2^a 3^b 5^c 7^d, >= 2), got {n}; "
                     f"nearest larger is {next_fast_size(n)}",
                 )
+        if n1 > MAX_NODES_PER_AXIS or n3 > MAX_NODES_PER_AXIS:
+            name, n = ("grid.n1", n1) if n1 > MAX_NODES_PER_AXIS else ("grid.n3", n3)
+            raise InputError(name, f"must be <= {MAX_NODES_PER_AXIS}, got {n}")
+        if n1 * n3 > MAX_NODES:
+            raise InputError("grid.n3", f"n1 * n3 must be <= {MAX_NODES} (2^26 nodes), got {n1} * {n3} = {n1 * n3}")
         object.__setattr__(self, "n1", n1)
         object.__setattr__(self, "n3", n3)
+        for name in ("L1", "L3"):
+            if isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"grid.{name}", f"must be a number > 0, got {getattr(self, name)!r}")
         object.__setattr__(self, "L1", check_positive("grid.L1", self.L1))
         object.__setattr__(self, "L3", check_positive("grid.L3", self.L3))
 

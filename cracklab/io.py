@@ -361,7 +361,7 @@ def scene_from_data(data: dict, arrays: dict | None = None):
         raise InputError("law.kind", f"is required; accepted: {', '.join(sorted(LAWS))}")
     law_data = dict(law_data)
     kind = law_data.pop("kind")
-    if kind not in LAWS:
+    if not isinstance(kind, str) or kind not in LAWS:
         raise InputError("law.kind", f"must be one of {', '.join(sorted(LAWS))}, got {kind!r}")
     for required in ("material", "grid", "t_end"):
         if required not in data:
@@ -471,7 +471,8 @@ def _restore_attr_types(data):
         if section not in SECTIONS or not isinstance(d, dict):
             continue
         if section == "law":
-            cls = LAWS.get(d.get("kind"))
+            kind = d.get("kind")
+            cls = LAWS.get(kind) if isinstance(kind, str) else None
             if cls is None:
                 continue
         else:

@@ -18,18 +18,31 @@ SHEAR = (1, 3)
 ALL = (1, 2, 3)
 
 
-def _check(law, name, lower=0.0, allow_equal=False):
-    """Validate a scalar or field parameter of ``law`` (> lower, or >= with allow_equal)."""
+def _check(law, name, lower=0.0, allow_equal=False, allow_inf=False):
+    """Validate a scalar or field parameter of ``law`` (> lower, or >= with allow_equal;
+    finite unless allow_inf)."""
     value = getattr(law, name)
     field_name = f"law.{name}"
+    op = ">=" if allow_equal else ">"
+    finite = "" if allow_inf else "finite "
+    if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
+        raise InputError(field_name, f"must be a {finite}number {op} {lower:g} or an (n1, n3) field of them, "
+                                     f"got {value!r}")
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(field_name, f"must be a number or an (n1, n3) field, got {value!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(field_name, f"must be a {finite}number {op} {lower:g} or an (n1, n3) field of them, "
+                                     f"got {value!r}") from None
     bad = (arr < lower) if allow_equal else (arr <= lower)
-    if np.any(bad) or np.any(np.isnan(arr)):
-        op = ">=" if allow_equal else ">"
-        got = value if arr.ndim == 0 else f"a field with minimum {np.nanmin(arr):g}"
+    infinite = np.isinf(arr) & ~bad if not allow_inf else np.zeros(arr.shape, bool)
+    bad = bad | infinite | np.isnan(arr)
+    if np.any(bad):
+        if arr.ndim == 0:
+            got = value
+        else:
+            got = f"a field holding {arr[bad].ravel()[0]:g}"
+        if np.any(infinite) or np.any(np.isnan(arr)):
+            raise InputError(field_name, f"must be a {finite}number {op} {lower:g}, got {got}")
         raise InputError(field_name, f"must be {op} {lower:g}, got {got}")
     if arr.ndim == 0:
         object.__setattr__(law, name, float(arr))
@@ -43,6 +56,10 @@ class TractionFree:
     bonded: np.ndarray | None = None
     kind = "traction_free"
     components = ALL
+
+    def __post_init__(self):
+        if not isinstance(self.contact, (bool, np.bool_)):
+            raise InputError("law.contact", f"must be true or false, got {self.contact!r}")
 
     def init_state(self, grid):
         return {}
@@ -121,8 +138,14 @@ class SlipWeakening:
         _check(self, "mu_d", allow_equal=True)
         _check(self, "D_c")
         _check(self, "sigma_n", allow_equal=True)
-        if np.any(np.asarray(self.mu_d) > np.asarray(self.mu_s)):
-            raise InputError("law.mu_d", "must be <= law.mu_s")
+        try:
+            above = np.asarray(self.mu_d) > np.asarray(self.mu_s)
+        except ValueError:          # fields of different shapes: the scene names the wrong one
+            above = False
+        if np.any(above):
+            raise InputError("law.mu_d", f"must be <= law.mu_s (static friction {self.mu_s!r}), got {self.mu_d!r}"
+                             if np.ndim(self.mu_d) == 0 and np.ndim(self.mu_s) == 0 else
+                             "must be <= law.mu_s at every point of the field")
 
     def init_state(self, grid):
         return {"slip": np.zeros(grid.shape)}
@@ -167,8 +190,19 @@ class PrescribedRupture:
     def __post_init__(self):
         _check(self, "speed")
         _check(self, "residual", allow_equal=True)
-        _check(self, "strength_before", allow_equal=True)
+        _check(self, "strength_before", allow_equal=True, allow_inf=True)
         _check(self, "weakening_time", allow_equal=True)
+        if np.ndim(self.speed) or np.ndim(self.weakening_time):
+            raise InputError("law.speed" if np.ndim(self.speed) else "law.weakening_time", "must be a number")
+        origin = self.origin
+        try:
+            ok = not isinstance(origin, (str, bytes, dict)) and 1 <= len(origin) <= 2 and all(
+                not isinstance(x, (bool, np.bool_)) and np.isfinite(float(x)) for x in origin)
+        except (TypeError, ValueError, OverflowError):
+            ok = False
+        if not ok:
+            raise InputError("law.origin", f"must be [x1, x3] (or [x1] in 2D) of finite numbers, got {origin!r}")
+        object.__setattr__(self, "origin", tuple(float(x) for x in origin))
 
     def init_state(self, grid):
         x1, x3 = np.meshgrid(grid.x1, grid.x3, indexing="ij")

@@ -28,22 +28,32 @@ class Loading:
     l0: float | None = None
 
     def __post_init__(self):
-        if self.time not in TIME_FUNCTIONS:
+        if not isinstance(self.time, str) or self.time not in TIME_FUNCTIONS:
             raise InputError("loading.time", f"must be one of {TIME_FUNCTIONS}, got {self.time!r}")
-        if self.time != "step" and not float(self.ramp_time) > 0:
-            raise InputError("loading.ramp_time", f"must be > 0 for a ramp, got {self.ramp_time!r}")
+        if isinstance(self.ramp_time, (bool, np.bool_)):
+            raise InputError("loading.ramp_time", f"must be a number >= 0, got {self.ramp_time!r}")
+        if self.time == "step":
+            check_positive("loading.ramp_time", self.ramp_time, allow_zero=True)
+        else:
+            check_positive("loading.ramp_time", self.ramp_time)      # > 0 for a ramp
         if not isinstance(self.constant_K, (bool, np.bool_)):
             raise InputError("loading.constant_K", f"must be true or false, got {self.constant_K!r}")
         if self.l0 is not None:
+            if isinstance(self.l0, (bool, np.bool_)):
+                raise InputError("loading.l0", f"must be a number > 0, got {self.l0!r}")
             check_positive("loading.l0", self.l0)
         for c in (1, 2, 3):
             value = self.field(c)
+            expect = "must be a finite number or an (n1, n3) field of finite numbers"
+            if value is None or isinstance(value, (bool, np.bool_, str, bytes)):
+                raise InputError(f"loading.tau0_{c}", f"{expect}, got {value!r}")
             try:
-                value = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                raise InputError(f"loading.tau0_{c}", f"must be a number or an (n1, n3) field, got {value!r}") from None
-            if not np.all(np.isfinite(value)):
-                raise InputError(f"loading.tau0_{c}", "must be finite")
+                arr = np.asarray(value, dtype=float)
+            except (TypeError, ValueError, OverflowError):
+                raise InputError(f"loading.tau0_{c}", f"{expect}, got {value!r}") from None
+            if not np.all(np.isfinite(arr)):
+                got = value if arr.ndim == 0 else "a field holding non-finite values"
+                raise InputError(f"loading.tau0_{c}", f"{expect}, got {got}")
 
     def field(self, component: int):
         return getattr(self, f"tau0_{component}")

@@ -18,15 +18,22 @@ class Material:
     nu: float
 
     def __post_init__(self):
+        for name in ("mu", "cs", "nu"):
+            if isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(f"material.{name}", f"must be a number, got {getattr(self, name)!r}")
         object.__setattr__(self, "mu", check_positive("material.mu", self.mu))
         object.__setattr__(self, "cs", check_positive("material.cs", self.cs))
         try:
             nu = float(self.nu)
-        except (TypeError, ValueError):
-            raise InputError("material.nu", f"must be a number, got {self.nu!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise InputError("material.nu", f"must be a number in (-1, 0.5), got {self.nu!r}") from None
         if not -1.0 < nu < 0.5:
             raise InputError("material.nu", f"must be in (-1, 0.5), got {self.nu!r}")
         object.__setattr__(self, "nu", nu)
+        rho = self.mu / self.cs**2 if self.cs**2 > 0 else float("inf")
+        if not (np.isfinite(rho) and rho > 0 and np.isfinite(self.mu / self.cs)):
+            raise InputError("material.cs", f"mu / cs^2 (the density) must be a finite number > 0, got "
+                                            f"mu = {self.mu!r}, cs = {self.cs!r}")
 
     @property
     def a(self) -> float:

@@ -25,33 +25,52 @@ class Record:
     def __post_init__(self):
         if isinstance(self.fields, str):
             object.__setattr__(self, "fields", (self.fields,))
+        if not isinstance(self.fields, (list, tuple, np.ndarray)):
+            raise InputError("record.fields", f"must be a list of field names ({', '.join(FIELDS)}), "
+                                              f"got {self.fields!r}")
         object.__setattr__(self, "fields", tuple(self.fields))
         for f in self.fields:
-            if f not in FIELDS:
+            if not isinstance(f, str) or f not in FIELDS:
                 raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}")
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")
         if self.times is not None:
             try:
+                if isinstance(self.times, (str, bytes, dict)) or any(
+                        isinstance(t, (bool, np.bool_, str, bytes)) for t in np.atleast_1d(self.times)):
+                    raise TypeError
                 times = tuple(float(t) for t in np.atleast_1d(self.times))
-            except (TypeError, ValueError):
-                raise InputError("record.times", f"must be a list of times, got {self.times!r}") from None
+            except (TypeError, ValueError, OverflowError):
+                raise InputError("record.times", f"must be a list of times in [0, t_end], got {self.times!r}") from None
             object.__setattr__(self, "times", times)
         if self.every is not None and self.times is not None:
             raise InputError("record.times", "give either record.every or record.times, not both")
         if self.region is not None:
+            if not isinstance(self.region, dict):
+                raise InputError("record.region", f"must be a table {{x1 = [lo, hi], x3 = [lo, hi]}}, "
+                                                  f"got {self.region!r}")
             for key, bounds in dict(self.region).items():
                 if key not in ("x1", "x3"):
                     raise InputError(f"record.region.{key}", "unknown key; accepted: x1, x3")
-                if not (np.ndim(bounds) == 1 and len(bounds) == 2 and bounds[0] <= bounds[1]):
+                try:
+                    ok = np.ndim(bounds) == 1 and len(bounds) == 2 and not any(
+                        isinstance(b, (bool, np.bool_, str, bytes)) for b in bounds) and \
+                        float(bounds[0]) <= float(bounds[1])
+                except (TypeError, ValueError, OverflowError):
+                    ok = False
+                if not ok:
                     raise InputError(f"record.region.{key}", f"must be (lo, hi) with lo <= hi, got {bounds!r}")
         if self.stations is not None:
+            if not isinstance(self.stations, dict):
+                raise InputError("record.stations", f"must be a table {{name = [x1, x3]}}, got {self.stations!r}")
             stations = {}
             for k, v in dict(self.stations).items():
                 try:
+                    if isinstance(v, (str, bytes)) or any(isinstance(x, (bool, np.bool_)) for x in v):
+                        raise TypeError
                     stations[str(k)] = tuple(float(x) for x in v)
-                except (TypeError, ValueError):
+                except (TypeError, ValueError, OverflowError):
                     stations[str(k)] = ()
                 if len(stations[str(k)]) not in (1, 2):
                     raise InputError(f"record.stations.{k}", f"must be (x1, x3) (or (x1,) in 2D), got {v!r}")

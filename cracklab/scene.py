@@ -15,6 +15,9 @@ from .record import Record
 from .stability import beta_max, modes_of
 
 FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
+MAX_FFT_THREADS = 1024
+MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before any work
+MAX_SNAPSHOTS = 10**7
 
 
 def resolve_formulation(formulation: str, components) -> str:
@@ -31,33 +34,39 @@ class Numerics:
     kernel (46), explicit update (37)) or "velocity" (Eq. 33, discretised kernel (45),
     semi-implicit update (50)) or "product" (velocity formulation with Z integrated
     exactly against the piecewise-linear velocity history, trapezoid update (50), one
-    predictor-corrector pass: does not grow in mode II, docs/stability.md); history ``engine``; ``window`` truncates the history at
+    predictor-corrector pass: does not grow in mode II, docs/stability.md); "auto" (default):
+    product when a shear component is active, displacement otherwise. History ``engine``
+    "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
+    exponential, direct when a ``window`` is set); ``window`` truncates the history at
     T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
     its velocity magnitude first exceeds it."""
 
-    formulation: str = "displacement"
-    engine: str = "direct"
+    formulation: str = "auto"
+    engine: str = "auto"
     window: float | None = None
     rupture_threshold: float = 0.0
     fft_threads: int = 1
 
     def __post_init__(self):
-        if self.formulation not in FORMULATIONS and self.formulation != "auto":
+        from .history import ENGINES
+
+        if not isinstance(self.engine, str) or (self.engine not in ENGINES and self.engine != "auto"):
+            raise InputError("numerics.engine",
+                             f"must be one of {['auto'] + sorted(ENGINES)}, got {self.engine!r}")
+        if not isinstance(self.formulation, str) or \
+                (self.formulation not in FORMULATIONS and self.formulation != "auto"):
             raise InputError("numerics.formulation",
                              f"must be one of {('auto',) + tuple(FORMULATIONS)}, got {self.formulation!r}")
         if self.window is not None:
             check_positive("numerics.window", self.window)
-            if self.engine != "direct":
+            if self.engine not in ("direct", "auto"):
                 raise InputError("numerics.window", f"a truncated history needs engine 'direct' "
                                                     f"(engine {self.engine!r} keeps the whole history)")
         check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
-        from .history import ENGINES
-
-        if self.engine not in ENGINES:
-            raise InputError("numerics.engine", f"must be one of {sorted(ENGINES)}, got {self.engine!r}")
         if isinstance(self.fft_threads, bool) or not isinstance(self.fft_threads, (int, np.integer)) \
-                or self.fft_threads < 1:
-            raise InputError("numerics.fft_threads", f"must be an integer >= 1, got {self.fft_threads!r}")
+                or not 1 <= self.fft_threads <= MAX_FFT_THREADS:
+            raise InputError("numerics.fft_threads", f"must be an integer >= 1 (and <= {MAX_FFT_THREADS}), "
+                                                     f"got {self.fft_threads!r}")
 
     def scheme(self, components) -> tuple[str, str]:
         """(formulation, convolution rule) used for a scene with these active components."""
@@ -91,6 +100,9 @@ class Scene:
         if not isinstance(self.units, dict) or set(self.units) != set(units) \
                 or not all(isinstance(v, str) for v in self.units.values()):
             raise InputError("units", f"must be a dict of strings with exactly the keys {units}, got {self.units!r}")
+        for name in ("t_end", "beta"):
+            if isinstance(getattr(self, name), (bool, np.bool_)):
+                raise InputError(name, f"must be a number > 0, got {getattr(self, name)!r}")
         object.__setattr__(self, "t_end", check_positive("t_end", self.t_end))
         object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
@@ -110,6 +122,17 @@ class Scene:
             raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme "
                                      f"on this grid (modes {', '.join(modes_of(active, self.grid.plane))}), "
                                      f"got {self.beta}")
+        steps = self.t_end / self.dt
+        if not steps <= MAX_STEPS:
+            raise InputError("t_end", f"must be at most {MAX_STEPS:.0e} time steps of dt = beta min(dx1, dx3) / cs "
+                                      f"= {self.dt:.6g}, i.e. t_end <= {MAX_STEPS * self.dt:.6g}, got {self.t_end!r} "
+                                      f"({steps:.3g} steps)")
+        if self.record.fields and self.record.times is None:
+            every = self.record.every or max(1, self.nsteps // 20)
+            if self.nsteps // every + 1 > MAX_SNAPSHOTS:
+                raise InputError("record.every", f"must give at most {MAX_SNAPSHOTS:.0e} snapshots "
+                                                 f"(every >= {self.nsteps // MAX_SNAPSHOTS + 1} for "
+                                                 f"{self.nsteps} steps), got {every}")
         self.record.snapshot_steps(self.nsteps, self.dt)
         self.record.region_slices(self.grid)
         self.record.station_nodes(self.grid)

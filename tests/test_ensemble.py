@@ -1,5 +1,6 @@
 """Ensembles: sweeps on a 2-worker LocalCluster into one Zarr v3 store, failures, resume,
 stable member ids, open_ensemble and the netCDF export."""
+import dataclasses
 import json
 import os
 from pathlib import Path
@@ -21,8 +22,10 @@ def flaky_crack(*, n=16, p=1.0, t_end=0.06, fail_flag=""):
     failure inside the worker, fixed by deleting the file)."""
     if fail_flag and os.path.exists(fail_flag):
         raise RuntimeError(f"injected failure: {fail_flag} exists")
-    return cracklab.scenes.elliptical_crack(n=n, a=0.25, b=0.2, p=p, t_end=t_end,
-                                            record=cracklab.Record(fields=("delta_2",), every=2))
+    scene = cracklab.scenes.elliptical_crack(n=n, a=0.25, b=0.2, p=p, t_end=t_end,
+                                             record=cracklab.Record(fields=("delta_2",), every=2))
+    # the direct (reference) engine: no fits or JIT compilation in every fresh worker
+    return scene.replace(numerics=dataclasses.replace(scene.numerics, engine="direct"))
 
 
 FLAKY = "test_ensemble:flaky_crack"
@@ -260,3 +263,90 @@ def test_demo_study_plans_on_the_asperity_builders():
     assert names == {"asperity_row", "random_toughness"}
     scene = E.build_scene(study.base, members[0].params)
     assert scene.grid.shape == (128, 64) and scene.numerics.fft_threads == 1 and scene.record.every == 16
+
+
+# ---------------------------------------------------------------------------- progress, workers
+def test_progress_bars_over_members_and_steps_quiet_off_a_terminal(tmp_path, capsys):
+    # a sweep: one bar over the members when asked ...
+    res = E.run(E.Builder(FLAKY), {"p": [1.0, 2.0]}, tmp_path / "a.zarr", scheduler="synchronous", progress=True)
+    err = capsys.readouterr().err
+    assert res.ok and "members: 100%" in err and "2/2" in err
+    # ... and none by default when stderr is not a terminal (as under pytest)
+    res = E.run(E.Builder(FLAKY), {"p": [1.0, 2.0]}, tmp_path / "b.zarr", scheduler="synchronous")
+    assert res.ok and capsys.readouterr().err == ""
+    # a single run: one bar over the steps
+    scene = flaky_crack()
+    cracklab.simulate(scene, progress=True)
+    err = capsys.readouterr().err
+    assert f"{scene.name}: 100%" in err and f"{scene.nsteps + 1}/{scene.nsteps + 1}" in err and "step" in err
+    cracklab.simulate(scene)
+    assert capsys.readouterr().err == ""
+    # the commands: quiet when the output is not a terminal, a bar with --progress
+    path = tmp_path / "scene.toml"
+    path.write_text(scene.to_toml())
+    runner = CliRunner()
+    quiet = runner.invoke(main, ["run", str(path), "-o", str(tmp_path / "r1.zarr")])
+    assert quiet.exit_code == 0 and "%|" not in quiet.output, quiet.output
+    loud = runner.invoke(main, ["run", str(path), "-o", str(tmp_path / "r2.zarr"), "--progress"])
+    assert loud.exit_code == 0 and "100%|" in loud.output, loud.output
+    study = tmp_path / "study.toml"
+    study.write_text(f'[study]\nbuilder = "{FLAKY}"\n[sweep]\np = [1.0, 2.0]\n')
+    quiet = runner.invoke(main, ["sweep", str(study), "-o", str(tmp_path / "s1.zarr"), "--scheduler", "synchronous"])
+    assert quiet.exit_code == 0 and "%|" not in quiet.output, quiet.output
+    loud = runner.invoke(main, ["sweep", str(study), "-o", str(tmp_path / "s2.zarr"), "--scheduler", "synchronous",
+                                "--progress"])
+    assert loud.exit_code == 0 and "members: 100%" in loud.output, loud.output
+
+
+def test_cli_workers_sizes_the_embedded_local_cluster(tmp_path, monkeypatch):
+    """--workers N: an embedded LocalCluster of N one-thread worker processes (here 1:
+    both members run in the same worker process, not in this one), FFT threads 1."""
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    study = tmp_path / "study.toml"
+    study.write_text(f'[study]\nbuilder = "{FLAKY}"\n[sweep]\np = [1.0, 2.0]\n')
+    store = tmp_path / "w.zarr"
+    res = CliRunner().invoke(main, ["sweep", str(study), "-o", str(store), "--workers", "1"])
+    assert res.exit_code == 0, res.output
+    workers = {s["id"]: _member_attrs(store, s["id"])["worker"] for s in E.member_status(store)}
+    assert len(workers) == 2 and len(set(workers.values())) == 1
+    assert not next(iter(workers.values())).endswith(f":{os.getpid()}")
+    ens = E.open_ensemble(store)
+    assert {E.member_scene(ens, m).numerics.fft_threads for m in ens.member.values} == {1}
+
+
+def test_embedded_cluster_is_sized_to_the_machine(monkeypatch):
+    """Default: one single-threaded worker process per core (never more than members),
+    FFT / BLAS threads 1 in the workers."""
+    import distributed
+
+    made = {}
+
+    class FakeCluster:
+        def __init__(self, **kwargs):
+            made.update(kwargs)
+
+        def close(self):
+            made["closed"] = True
+
+    class FakeClient:
+        def __init__(self, cluster):
+            self.cluster = cluster
+
+        def close(self):
+            pass
+
+    monkeypatch.setattr(distributed, "LocalCluster", FakeCluster)
+    monkeypatch.setattr(distributed, "Client", FakeClient)
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    cores = E._cores()
+    with E._client(n_tasks=100):
+        pass
+    assert made["n_workers"] == cores and made["threads_per_worker"] == 1 and made["processes"] is True
+    assert made["env"]["CRACKLAB_FFT_THREADS"] == "1" and made["env"]["OMP_NUM_THREADS"] == "1"
+    assert made["closed"]
+    with E._client(n_tasks=1):
+        pass
+    assert made["n_workers"] == 1
+    with E._client(workers=3, n_tasks=100):
+        pass
+    assert made["n_workers"] == 3

@@ -238,7 +238,7 @@ BAD = [
     (edit("every = 2", "every = 2\ntimes = [0.0]"), "record.times", "either record.every or record.times"),
     (BASE + "\n[record.region]\nx1 = [0.7, 0.3]\n", "record.region.x1", "lo <= hi"),
     (edit("formulation = \"displacement\"", "formulation = \"displacement\"\nengine = \"magic\""),
-     "numerics.engine", "must be one of ['direct'"),
+     "numerics.engine", "must be one of ['auto', 'direct'"),
     (edit("formulation = \"displacement\"", "formulation = \"displacement\"\nfft_threads = 0"),
      "numerics.fft_threads", "integer >= 1"),
     (edit("formulation = \"displacement\"", "formulation = \"implicit\""), "numerics.formulation",
