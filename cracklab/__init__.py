@@ -5,7 +5,7 @@ Geubelle & Rice (1995), J. Mech. Phys. Solids 43(11): modes I, II and III, 3D an
 
 __version__ = "0.1.0"
 
-from . import analysis, ensemble, kernels, scenes  # noqa: E402
+from . import analysis, energy, ensemble, kernels, scenes  # noqa: E402
 from .ensemble import open_ensemble  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
 from .grid import Grid  # noqa: E402
