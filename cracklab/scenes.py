@@ -82,20 +82,38 @@ TPV3_STATIONS = [(s, 0) for s in (-120, -75, -45, 0, 45, 75, 120)] + \
     [(0, d) for d in (-75, -45, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
 
 
+def _tpv3_cell_fraction(x, dx, half_width):
+    """Fraction of the cell [x - dx/2, x + dx/2] that lies inside |x| <= half_width."""
+    lo = np.maximum(x - 0.5 * dx, -half_width)
+    hi = np.minimum(x + 0.5 * dx, half_width)
+    return np.clip((hi - lo) / dx, 0.0, 1.0)
+
+
 def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
     """SCEC TPV3 (see shared/reference/tpv3_mdsbi/README.md): 30 km x 15 km fault
     centred in a periodic domain, slip-weakening friction, bonded outside the fault;
     SI units. Records the SCEC on-fault stations and the rupture time (slip rate
-    above 1 mm/s)."""
+    above 1 mm/s).
+
+    The square nucleation patch and the fault edge are put on the grid as MDSBI does
+    with its 'box' asperities (the reference code): each node stands for the cell
+    dx x dx around it and takes the area fraction of that cell inside the 3 km x 3 km
+    square, so the initial shear stress is 70 + 11.6 f MPa (75.8 MPa on the nodes that
+    lie exactly on the patch edge, 72.9 MPa at its corners; the patch carries exactly
+    9 km^2 of overstress at any dx). Likewise a node whose cell is partly outside the
+    30 km x 15 km fault has a partly infinite (i.e. infinite) strength: it is bonded.
+    See docs/tpv3.md."""
     L1, L3 = domain
     n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
     grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
     xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
-    x1, x3 = np.meshgrid(grid.x1 - xc, grid.x3 - zc, indexing="ij")
-    fault = (np.abs(x1) <= 15000.0 + 1e-6) & (np.abs(x3) <= 7500.0 + 1e-6)
-    patch = (np.abs(x1) <= 1500.0 + 1e-6) & (np.abs(x3) <= 1500.0 + 1e-6)
-    tau0 = np.where(patch, 81.6e6, 70.0e6)
+    f1 = _tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 1500.0)
+    f3 = _tpv3_cell_fraction(grid.x3 - zc, grid.dx3, 1500.0)
+    patch = np.outer(f1, f3)                       # area fraction of each cell in the patch
+    tau0 = 70.0e6 + (81.6e6 - 70.0e6) * patch
+    fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
+                     _tpv3_cell_fraction(grid.x3 - zc, grid.dx3, 7500.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
     numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
