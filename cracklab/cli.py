@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import click
@@ -56,6 +57,12 @@ def _load_scene(path: str):
         raise InputError(path, f"cannot open as a scene TOML or a cracklab Zarr store: {exc}") from None
     if "scene" not in ds.attrs:
         raise InputError(path, "is a Zarr store but not a cracklab run (no 'scene' attribute)")
+    from .checkpoint import RUN_FORMAT
+
+    fmt = ds.attrs.get("cracklab_run_format", RUN_FORMAT)
+    if not isinstance(fmt, int) or fmt > RUN_FORMAT:
+        raise InputError(path, f"was written by cracklab {ds.attrs.get('cracklab_version', '?')} in store "
+                               f"format {fmt!r}; this cracklab reads formats up to {RUN_FORMAT}")
     return scene_of(ds)
 
 
@@ -63,9 +70,15 @@ def _load_scene(path: str):
 @click.argument("scene", type=click.Path(exists=True))
 @click.option("-o", "--output", required=True, type=click.Path(), help="Zarr store to write.")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
-def run(scene: str, output: str, progress) -> None:
+@click.option("--checkpoint-every", default=None, metavar="N|Ss",
+              help="Checkpoint the run into OUTPUT every N steps, or every S seconds of wall time "
+                   "('60s'); 0: never. Default: every 60 s (at most 10 % of the run time).")
+@click.option("--resume", is_flag=True,
+              help="Continue the run killed in OUTPUT from its last checkpoint (same results); "
+                   "starts over when there is none, does nothing when OUTPUT is complete.")
+def run(scene: str, output: str, progress, checkpoint_every, resume) -> None:
     """Run SCENE (a TOML scene or the Zarr store of an earlier run) into OUTPUT."""
-    from .errors import InputError, SimulationError
+    from .errors import InputError, SimulationError, StoreError
     from .simulate import simulate
 
     try:
@@ -75,8 +88,8 @@ def run(scene: str, output: str, progress) -> None:
     if progress is None:
         progress = sys.stderr.isatty()
     try:
-        simulate(sc, progress=progress, store=output)
-    except SimulationError as exc:
+        simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume)
+    except (SimulationError, StoreError, InputError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"cracklab: wrote {output}")
 
@@ -96,7 +109,9 @@ def sweep(study: str, output: str, scheduler, workers, resume, progress) -> None
     """Run the ensemble of STUDY (a STUDY.toml, see docs/ensembles.md) into OUTPUT.
 
     Exits with status 1 when a member failed (the failures are listed, and recorded
-    with their error in the member's group); a rerun redoes only what is not complete."""
+    with their error in the member's group); a rerun redoes only what is not complete.
+    A second sweep into an OUTPUT that another sweep is running into is refused
+    (a lock file in the store; a lock left by a killed sweep is taken over)."""
     from .ensemble import run_study
     from .errors import InputError
 
@@ -105,6 +120,8 @@ def sweep(study: str, output: str, scheduler, workers, resume, progress) -> None
                            progress=progress)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
+    except OSError as exc:       # a read-only location, a full disk, ...
+        raise click.ClickException(f"store: cannot write {output}: {exc.strerror or exc}") from None
     click.echo(f"cracklab: {result.summary()}")
     if not result.ok:
         sys.exit(1)
@@ -132,11 +149,11 @@ def plot(store, output, kind, field, time_, member, by, x_param) -> None:
     import xarray as xr
 
     from . import plot as P
-    from .ensemble import is_ensemble, open_ensemble
+    from .ensemble import open_ensemble, store_kind
     from .errors import InputError
 
     try:
-        ens = is_ensemble(store)
+        ens = store_kind(store) == "ensemble"
         ds = open_ensemble(store) if ens else xr.open_zarr(store, consolidated=False)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
@@ -186,6 +203,8 @@ def export(store, netcdf, member) -> None:
         out = export_netcdf(store, netcdf, member=member)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
+    except OSError as exc:       # a read-only location, a full disk, ...
+        raise click.ClickException(f"--netcdf: cannot write {netcdf}: {exc.strerror or exc}") from None
     click.echo(f"cracklab: wrote {out}")
 
 
@@ -194,15 +213,19 @@ def export(store, netcdf, member) -> None:
 @click.option("--n3", type=int, default=256, show_default=True)
 @click.option("--mode", type=click.Choice(["I", "II", "III", "shear"]), default="I", show_default=True)
 @click.option("--steps", "nsteps", type=int, default=200, show_default=True)
-@click.option("--engine", default="direct", show_default=True)
+@click.option("--engine", default="exponential", show_default=True)
+@click.option("--threads", type=int, default=1, show_default=True,
+              help="Threads for the FFTs and the history engine (more than one helps only on an "
+                   "otherwise idle machine).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from .errors import InputError
 
     try:
-        result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty())
+        result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
+                           threads=threads)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:

@@ -24,3 +24,12 @@ def check_positive(field: str, value, *, allow_zero: bool = False) -> float:
     if x < 0 or (x == 0 and not allow_zero):
         raise InputError(field, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
     return x
+
+
+class StoreError(RuntimeError):
+    """A run's Zarr store cannot be used: not a cracklab store, another format, not
+    writable, disk full, nothing to resume. ``path`` names the store."""
+
+    def __init__(self, path, message: str):
+        self.path = str(path)
+        super().__init__(f"store {self.path}: {message}")

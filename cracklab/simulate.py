@@ -7,9 +7,10 @@ import numpy as np
 import xarray as xr
 
 from . import __version__
-from .errors import SimulationError
+from . import checkpoint
+from .errors import InputError, SimulationError, StoreError
 from .io import scene_from_data, scene_to_json
-from .stepper import steps
+from .stepper import Stepper
 
 LONG_NAMES = {
     "delta_1": ("slip along x1", "length"), "delta_2": ("opening", "length"),
@@ -52,10 +53,15 @@ def _field(state, name):
 
 
 class _Recorder:
-    """Collects snapshots, station series and rupture times; streams to Zarr if asked."""
+    """Collects snapshots, station series and rupture times; streams to Zarr if asked.
 
-    def __init__(self, scene, store, flush_every=8):
-        self.scene, self.store, self.flush_every = scene, store, flush_every
+    A store run creates the store first at its final size (coordinates, snapshot variables
+    NaN until written, the scene inputs and attrs), writes snapshots every ``flush_every``
+    and at checkpoints, and adds the station series and rupture times at the end. ``path`` is the store's local path
+    (None for store objects and URLs: no checkpoints)."""
+
+    def __init__(self, scene, store, path=None, flush_every=8):
+        self.scene, self.store, self.path, self.flush_every = scene, store, path, flush_every
         grid = scene.grid
         self.steps = set(int(s) for s in scene.record.snapshot_steps(scene.nsteps, scene.dt)) \
             if scene.record.fields else set()
@@ -67,9 +73,13 @@ class _Recorder:
         self.rupture = np.full(grid.shape, np.nan)
         self.pending = []
         self.written = False
+        self.nsnap = 0              # snapshots in the store
+        self.checkpoint_step = None
+        self.kept_attrs = {}        # attrs of an empty group the run is written into (ensemble member)
         self.times = []
         # the scene as attrs and input arrays, serialised once per run
         self.scene_json, self.inputs = scene_to_json(scene)
+        self.digest = checkpoint.scene_digest(self.scene_json, self.inputs)
         self.x1 = grid.x1[self.s1]
         self.x3 = grid.x3[self.s3]
 
@@ -102,27 +112,110 @@ class _Recorder:
             "x3": ("x3", self.x3, {"units": u["length"], "long_name": "distance along x3", "axis": "Y"}),
         }
 
+    def _store_op(self, doing, fn, *args, **kwargs):
+        """Run a write to the store; an OSError becomes one StoreError."""
+        try:
+            return fn(*args, **kwargs)
+        except OSError as exc:
+            err = checkpoint.store_error(self.path or self.store, exc, doing)
+            if self.checkpoint_step is not None:
+                err.args = (f"{err.args[0]}; the store keeps the run up to its checkpoint after step "
+                            f"{self.checkpoint_step}: fix the cause, then resume (cracklab run --resume)",)
+            raise err from None
+
+    def snapshot_times(self):
+        """Times of all the snapshots of the run (as the stepper computes them)."""
+        return np.array([n * self.scene.dt for n in sorted(self.steps)])
+
+    def create(self):
+        """Create the store at its final size: coordinates (all snapshot times), snapshot
+        variables (NaN until written: shapes never change during the run, so a killed
+        store always opens), scene inputs and attrs."""
+        import dask.array as da
+
+        t_all = self.snapshot_times()
+        ds = xr.Dataset(coords=self._coords(t_all))
+        n1, n3 = self.x1.size, self.x3.size
+        ct = max(1, min(self.flush_every, (8 << 20) // max(1, 8 * n1 * n3)))   # <= 8 MB chunks
+        for f in self.scene.record.fields:
+            ds[f] = (("t", "x1", "x3"), da.full((t_all.size, n1, n3), np.nan, chunks=(ct, n1, n3)),
+                     _attrs(self.scene, f))
+        for name, arr in self.inputs.items():
+            ds[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(self.scene, name))
+        ds.attrs = self.global_attrs("running")
+        if self.path is not None:
+            # the group and its attrs first: a kill while creating leaves a store that
+            # is recognisably a cracklab run (a resume starts it over)
+            import zarr
+
+            def fresh():
+                zarr.open_group(str(self.path), mode="w").attrs.update(ds.attrs)
+                ds.to_zarr(self.store, mode="a", consolidated=False, compute=False)
+
+            self._store_op("creating the store", fresh)
+        else:
+            self._store_op("creating the store", ds.to_zarr, self.store, mode="w", consolidated=False,
+                           compute=False)
+        self.written = True
+
     def flush(self):
         if not self.pending:
             return
         ds = self._snapshot_ds(self.pending)
         if self.store is not None:
-            if not self.written:
-                ds.attrs.update(self.global_attrs())
-                ds.to_zarr(self.store, mode="w", consolidated=False)
-                self.written = True
-            else:
-                ds.to_zarr(self.store, append_dim="t", consolidated=False)
+            i0, i1 = self.nsnap, self.nsnap + len(self.pending)
+            self._store_op(f"writing the snapshots up to t = {self.pending[-1][0]:g}", ds.drop_vars(["x1", "x3"]).to_zarr,
+                           self.store, region={"t": slice(i0, i1)}, consolidated=False)
+            self.nsnap = i1
         else:
             self.times.append(ds)
         self.pending = []
 
-    def global_attrs(self):
-        return {"Conventions": "CF-1.10", "title": f"cracklab run: {self.scene.name}",
-                "source": f"cracklab {__version__}", "cracklab_version": __version__,
-                "scene": self.scene_json}
+    def global_attrs(self, status=None):
+        out = {"Conventions": "CF-1.10", "title": f"cracklab run: {self.scene.name}",
+               "source": f"cracklab {__version__}", "cracklab_version": __version__,
+               "scene": self.scene_json}
+        if self.store is not None:
+            out = {**self.kept_attrs, **out}
+            out.update({"cracklab_run_format": checkpoint.RUN_FORMAT, "cracklab_scene_digest": self.digest,
+                        "cracklab_status": status or "running"})
+            if self.checkpoint_step is not None and status == "running":
+                out["cracklab_checkpoint_step"] = self.checkpoint_step
+        return out
 
-    def finish(self, last_n):
+    # -- checkpoints ---------------------------------------------------------------
+    def checkpoint(self, stepper, n):
+        """Flush the snapshots, then write the checkpoint after step ``n``; seconds taken."""
+        import time
+
+        t0 = time.perf_counter()
+        self.flush()
+        state = {"cracklab_version": __version__, "digest": self.digest, "n": n, "nsnap": self.nsnap,
+                 "stepper": stepper.get_state(), "rupture": self.rupture,
+                 "series": {f: self.series[f][:n + 1] for f in self.station_fields}}
+        self._store_op(f"writing the checkpoint after step {n}", checkpoint.write, self.path, state)
+        self.checkpoint_step = n
+        try:  # informational: the snapshots up to this step match the checkpoint
+            import zarr
+
+            zarr.open_group(str(self.path), mode="a").attrs.update(
+                {"cracklab_checkpoint_step": n, "cracklab_checkpoint_snapshots": self.nsnap})
+        except OSError as exc:
+            raise checkpoint.store_error(self.path, exc, f"recording the checkpoint after step {n}") from None
+        return time.perf_counter() - t0
+
+    def restore(self, ck):
+        """Continue from checkpoint ``ck``: cut the store back to it, restore the series."""
+        self._store_op("preparing the store to resume", checkpoint.prepare_resume, self.path, self.snapshot_times())
+        self.written = True
+        self.nsnap = int(ck["nsnap"])
+        self.checkpoint_step = int(ck["n"])
+        for f in self.station_fields:
+            rows = np.asarray(ck["series"][f])
+            self.series[f][:rows.shape[0]] = rows
+        self.rupture[...] = ck["rupture"]
+
+    def finish(self, last_n, error=None):
         self.flush()
         scene = self.scene
         t_all = np.arange(last_n + 1) * scene.dt
@@ -139,15 +232,22 @@ class _Recorder:
                 t_station=("t_station", t_all, {"units": scene.units["time"], "long_name": "time"}))
             for f in self.station_fields:
                 extra[f"station_{f}"] = (("station", "t_station"), self.series[f][:last_n + 1].T, _attrs(scene, f))
-        for name, arr in self.inputs.items():
-            extra[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(scene, name))
-        extra.attrs = self.global_attrs()
         if self.store is not None:
             if not self.written:
-                xr.Dataset(coords={"t": self._coords(None)["t"]}, attrs=self.global_attrs()).to_zarr(
-                    self.store, mode="w", consolidated=False)
-            extra.to_zarr(self.store, mode="a", consolidated=False)
+                self.create()
+            if self.nsnap < len(self.steps):     # a failed run: keep what was recorded
+                self._store_op("cutting the snapshots to those recorded", checkpoint.cut_snapshots,
+                               self.store, self.nsnap)
+            extra.attrs = self.global_attrs("failed" if error else "complete")
+            if error:
+                extra.attrs["cracklab_error"] = str(error)
+            self._store_op("writing the station series and rupture times", extra.to_zarr, self.store,
+                           mode="a", consolidated=False)
+            if self.path is not None:
+                checkpoint.remove(self.path)
             return xr.open_zarr(self.store, consolidated=False)
+        for name, arr in self.inputs.items():
+            extra[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(scene, name))
         parts = self.times or [xr.Dataset(coords={"t": self._coords(None)["t"]})]
         ds = xr.concat(parts, dim="t") if len(parts) > 1 else parts[0]
         ds = xr.merge([ds, extra], combine_attrs="override")
@@ -155,25 +255,101 @@ class _Recorder:
         return ds
 
 
-def simulate(scene, *, progress=False, store=None):
+CHECKPOINT_SECONDS = 60.0
+
+
+def _checkpoint_policy(value):
+    """(every N steps, every S seconds of wall time) from ``checkpoint_every``."""
+    err = InputError("checkpoint_every", f"must be an integer >= 0 (steps; 0: never) or a duration "
+                                         f"like '60s' (seconds of wall time, > 0), got {value!r}")
+    if value is None:
+        return None, CHECKPOINT_SECONDS
+    if isinstance(value, str):
+        text = value.strip().lower()
+        if text.endswith("s"):
+            try:
+                sec = float(text[:-1])
+            except ValueError:
+                raise err from None
+            if not (sec > 0 and np.isfinite(sec)):
+                raise err
+            return None, sec
+        try:
+            value = int(text)
+        except ValueError:
+            raise err from None
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+        raise err
+    return (int(value) or None), None
+
+
+def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
     ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
     snapshots stream to that Zarr store during the run and the result is read back lazily.
     On a blow-up, what was recorded is kept (flushed to the store) and SimulationError raised.
+
+    A run into a local store path checkpoints its full state into the store (docs/reliability.md):
+    ``checkpoint_every`` N steps, or ``"60s"`` of wall time (default: every 60 s, at most 10 %
+    of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
+    checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a
+    complete store is returned as is. Store problems raise StoreError.
     """
-    rec = _Recorder(scene, store)
-    iterator = steps(scene)
+    import time
+
+    every_n, every_s = _checkpoint_policy(checkpoint_every)
+    adaptive = checkpoint_every is None     # the default: keep checkpoints under 10 % of the time
+    path = checkpoint.local_path(store) if store is not None else None
+    if resume and path is None:
+        raise InputError("resume", "needs a store path (a local Zarr directory) to resume from")
+    rec = _Recorder(scene, store, path)
+    start, last = None, -1
+    if path is not None:
+        if resume:
+            attrs, ck = checkpoint.check_resumable(path, __version__)
+            if attrs.get("cracklab_scene_digest", rec.digest) != rec.digest or \
+                    (ck is not None and ck["digest"] != rec.digest):
+                raise StoreError(path, "holds a run of a different scene; run without resume to overwrite it "
+                                       "or choose another path")
+            if ck is None and attrs.get("cracklab_status") == "complete":
+                return xr.open_zarr(store, consolidated=False)
+            if ck is not None:
+                rec.restore(ck)
+                start, last = ck["stepper"], int(ck["n"])
+        else:
+            checkpoint.check_writable_target(path)
+        kind, attrs = checkpoint.inspect(path)
+        if kind == "empty" and not rec.written:
+            rec.kept_attrs = attrs
+    if store is not None and not rec.written:
+        rec.create()
+    try:
+        stepper = Stepper(scene, start=start)
+    except (ValueError, KeyError, TypeError) as exc:
+        if start is None:
+            raise
+        raise StoreError(path, f"its checkpoint does not fit this run ({exc}); run again without resume") from None
+    iterator = iter(stepper)
     if progress:
         from tqdm.auto import tqdm
 
-        iterator = tqdm(iterator, total=scene.nsteps + 1, desc=scene.name, unit="step")
-    last = -1
+        iterator = tqdm(iterator, total=scene.nsteps + 1, initial=last + 1, desc=scene.name, unit="step")
+    do_ckpt = path is not None and (every_n or every_s)
+    t_ckpt, cost, n_ckpt = time.monotonic(), 0.0, last
     try:
         for state in iterator:
             rec(state)
             last = state.n
+            if do_ckpt and last < scene.nsteps:
+                if every_n:
+                    due = last > max(n_ckpt, 0) and last % every_n == 0
+                else:
+                    due = time.monotonic() - t_ckpt >= (max(every_s, 10.0 * cost) if adaptive else every_s)
+                if due:
+                    cost = rec.checkpoint(stepper, last)
+                    t_ckpt, n_ckpt = time.monotonic(), last
     except SimulationError as exc:
-        exc.partial = rec.finish(max(last, 0))
+        exc.partial = rec.finish(max(last, 0), error=exc)
         raise
     return rec.finish(last)
 

@@ -11,6 +11,15 @@ from .laws import solve_velocity
 from .response import Response
 from .spectral import Transforms
 
+# Exponential-growth detector: the run stops when max |v| grew by more than GROWTH_FACTOR
+# over the last GROWTH_WINDOW steps and exceeds GROWTH_BOUND times the velocity scale
+# of the load, c_s max|tau0| / mu (the slip rate a stress of the size of the load
+# radiates). A stable run stays far below: peak slip rates at rupture fronts are a few
+# times that scale.
+GROWTH_WINDOW = 50
+GROWTH_FACTOR = 1e3
+GROWTH_BOUND = 1e3
+
 
 @dataclass
 class State:
@@ -25,8 +34,153 @@ class State:
     law_state: dict
 
 
-def steps(scene, response=None):
-    """Generate the State after each step n = 0 .. nsteps.
+def _copy(x):
+    if isinstance(x, dict):
+        return {k: _copy(a) for k, a in x.items()}
+    return x.copy() if isinstance(x, np.ndarray) else x
+
+
+class Stepper:
+    """A resumable run of ``scene``: iterate for the State after each step n = 0 .. nsteps.
+
+    ``start``: a dict from :meth:`get_state` (taken after some step m); the iteration
+    then continues with step m + 1 and gives the same States as an uninterrupted run.
+    ``response``: a Response to use (built for this scene); its state is restored too.
+    """
+
+    def __init__(self, scene, response=None, start=None):
+        self.scene = scene
+        grid, comps = scene.grid, scene.components
+        if response is None:
+            response = Response.for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
+        self.response = response
+        self.load = scene.loading
+        self.n = 0                  # the next step to take
+        self.delta = {c: np.zeros(grid.shape) for c in comps}
+        self.v = {c: np.zeros(grid.shape) for c in comps}
+        self.tau = None
+        self.lstate = scene.law.init_state(grid)
+        self.l0 = None
+        # growth detector: max |v| of the last GROWTH_WINDOW steps, running load velocity scale
+        self.vmax = np.zeros(GROWTH_WINDOW)
+        self.vscale = 0.0
+        base = max(float(np.max(np.abs(self.load.field(c)))) for c in comps)
+        self._vunit = base * scene.material.cs / scene.material.mu
+        if start is not None:
+            self.set_state(start)
+
+    def get_state(self) -> dict:
+        """Everything needed to continue after the last step taken (arrays copied)."""
+        return {"n": self.n, "delta": _copy(self.delta), "v": _copy(self.v), "tau": _copy(self.tau),
+                "law": _copy(self.lstate), "l0": self.l0, "load_l0": self.load.l0,
+                "vmax": self.vmax.copy(), "vscale": self.vscale, "response": self.response.get_state()}
+
+    def set_state(self, state: dict) -> None:
+        """Restore a state from :meth:`get_state` (a Stepper of the same scene)."""
+        self.n = int(state["n"])
+        self.delta = {int(c): np.array(a, dtype=float) for c, a in state["delta"].items()}
+        self.v = {int(c): np.array(a, dtype=float) for c, a in state["v"].items()}
+        self.tau = None if state["tau"] is None else {int(c): np.array(a) for c, a in state["tau"].items()}
+        self.lstate = _copy(state["law"])
+        self.l0 = state["l0"]
+        if state["load_l0"] is not None and self.load.l0 is None:
+            self.load = dataclasses.replace(self.load, l0=state["load_l0"])
+        self.vmax = np.array(state["vmax"], dtype=float)
+        self.vscale = float(state["vscale"])
+        self.response.set_state(state["response"])
+
+    def __iter__(self):
+        return self._run()
+
+    def _run(self):
+        """Steps (i)-(v); see :func:`steps`."""
+        scene = self.scene
+        grid, mat, law = scene.grid, scene.material, scene.law
+        comps = scene.components
+        dt = scene.dt
+        response = self.response
+        eta = {c: mat.eta(c) for c in comps}
+        velocity = scene.formulation == "velocity"
+        product = scene.formulation == "product"
+        area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
+        width = grid.L3 if not grid.plane else 1.0
+        lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
+        for n in range(self.n, scene.nsteps + 1):
+            load, l0 = self.load, self.l0
+            t = n * dt
+            if product:
+                known = {c: delta[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
+                f = response.predict(v)
+                trial = {c: known[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
+                if n > 0:  # predictor: the law on a copy of its state
+                    pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
+                    law.update(pstate, trial, dt, v, t, tau)
+                    tau0 = load.at(t, comps, _crack_length(law, pstate, load, area, width, l0))
+                    vp, _ = solve_velocity(law, pstate, {c: tau0[c] + f[c] for c in comps}, trial, eta, dt,
+                                           law.strength(pstate, t, grid))
+                    f = response.correct(vp)
+                    trial = {c: known[c] + 0.5 * dt * vp[c] for c in comps}
+            elif velocity:
+                dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
+                f = response.functional(dstar, v)
+                trial = {c: delta[c] + dt * v[c] for c in comps}
+            else:
+                if n > 0:
+                    for c in comps:
+                        delta[c] += dt * v[c]
+                f = response.functional(delta)
+                trial = delta
+            law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
+            if load.constant_K and l0 is None:
+                l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+                if load.l0 is None:
+                    # Loading.factor scales by sqrt(l0 / l): give it the initial length
+                    load = self.load = dataclasses.replace(load, l0=l0)
+            length = _crack_length(law, lstate, load, area, width, l0)
+            tau0 = load.at(t, comps, length)
+            strength = law.strength(lstate, t, grid)
+            tau_star = {c: tau0[c] + f[c] for c in comps}
+            v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
+            if (velocity or product) and n > 0:
+                # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
+                for c in comps:
+                    delta[c] += 0.5 * dt * (v[c] + v_new[c])
+            v = v_new
+            self.v, self.tau, self.n = v, tau, n + 1
+            self._check(n, t, v, load.factor(t, length))
+            yield State(n, t, delta, v, tau, np.broadcast_to(strength, grid.shape), lstate)
+
+    def _check(self, n, t, v, g):
+        """Stop on a non-finite velocity or on exponential growth (module constants)."""
+        grid = self.scene.grid
+        peaks = {}
+        for c, vc in v.items():
+            peaks[c] = max(float(vc.max()), -float(vc.min()))
+            if not np.isfinite(peaks[c]):
+                check_finite(n, t, v, grid)
+        self.vscale = max(self.vscale, abs(g) * self._vunit)
+        c = max(peaks, key=peaks.get)
+        m = peaks[c]
+        old = self.vmax[n % GROWTH_WINDOW] if n >= GROWTH_WINDOW else self.vmax[0]
+        self.vmax[n % GROWTH_WINDOW] = m
+        if m > GROWTH_BOUND * self.vscale and m > GROWTH_FACTOR * old:
+            from .stability import beta_max
+
+            sc = self.scene
+            i, k = np.unravel_index(np.argmax(np.abs(v[c])), v[c].shape)
+            bmax = beta_max(grid, *sc.numerics.scheme(sc.components), sc.components)
+            grew = f"{m / old:.3g}-fold" if old > 0 else "from zero"
+            raise SimulationError(
+                f"exponential growth of v_{c} at step {n} (t = {t:g}) at node ({i}, {k}), "
+                f"x1 = {grid.x1[i]:g}, x3 = {grid.x3[k]:g}: max |v_{c}| = {m:.3g} grew {grew} over the "
+                f"last {min(n, GROWTH_WINDOW)} steps and is {m / self.vscale:.3g} times the load's velocity scale "
+                f"c_s max|tau0| / mu = {self.vscale:.3g}; the time step is unstable (beta = {sc.beta:g}, "
+                f"stable limit {bmax:.4g} for the {sc.formulation} scheme); the run was stopped")
+
+
+def steps(scene, response=None, start=None):
+    """Generate the State after each step n = 0 .. nsteps (from step m + 1 with ``start``,
+    a :meth:`Stepper.get_state` taken after step m).
 
     Displacement formulation: explicit update (37), delta_n = delta_{n-1} + dt v_{n-1}.
     Velocity formulation: semi-implicit update (50); the functional is evaluated at
@@ -34,68 +188,9 @@ def steps(scene, response=None):
     Product scheme: trapezoid update (50) with one predictor-corrector pass: the law is
     solved with the velocity held at v_{n-1} (on a copy of the law state), then again
     with the functional of that predicted velocity; 2 FFT pairs per step.
+    Raises SimulationError on a non-finite velocity or exponential growth.
     """
-    grid, mat, law, load = scene.grid, scene.material, scene.law, scene.loading
-    comps = scene.components
-    dt = scene.dt
-    if response is None:
-        response = Response(mat, grid, dt, comps, formulation=scene.formulation,
-                            engine=scene.numerics.engine, window=scene.numerics.window,
-                            transforms=Transforms(grid, scene.numerics.fft_threads))
-    eta = {c: mat.eta(c) for c in comps}
-    zero = {c: np.zeros(grid.shape) for c in comps}
-    delta = {c: zero[c].copy() for c in comps}
-    v = {c: zero[c].copy() for c in comps}
-    lstate = law.init_state(grid)
-    velocity = scene.formulation == "velocity"
-    product = scene.formulation == "product"
-    area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
-    width = grid.L3 if not grid.plane else 1.0
-    l0 = None
-    tau = None
-    for n in range(scene.nsteps + 1):
-        t = n * dt
-        if product:
-            known = {c: delta[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
-            f = response.predict(v)
-            trial = {c: known[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
-            if n > 0:  # predictor: the law on a copy of its state
-                pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
-                law.update(pstate, trial, dt, v, t, tau)
-                tau0 = load.at(t, comps, _crack_length(law, pstate, load, area, width, l0))
-                vp, _ = solve_velocity(law, pstate, {c: tau0[c] + f[c] for c in comps}, trial, eta, dt,
-                                       law.strength(pstate, t, grid))
-                f = response.correct(vp)
-                trial = {c: known[c] + 0.5 * dt * vp[c] for c in comps}
-        elif velocity:
-            dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
-            f = response.functional(dstar, v)
-            trial = {c: delta[c] + dt * v[c] for c in comps}
-        else:
-            if n > 0:
-                for c in comps:
-                    delta[c] += dt * v[c]
-            f = response.functional(delta)
-            trial = delta
-        law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
-        if load.constant_K and l0 is None:
-            l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
-            if load.l0 is None:
-                # Loading.factor scales by sqrt(l0 / l): give it the initial length
-                load = dataclasses.replace(load, l0=l0)
-        length = _crack_length(law, lstate, load, area, width, l0)
-        tau0 = load.at(t, comps, length)
-        strength = law.strength(lstate, t, grid)
-        tau_star = {c: tau0[c] + f[c] for c in comps}
-        v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
-        if (velocity or product) and n > 0:
-            # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
-            for c in comps:
-                delta[c] += 0.5 * dt * (v[c] + v_new[c])
-        v = v_new
-        check_finite(n, t, v, grid)
-        yield State(n, t, delta, v, tau,
-                    np.broadcast_to(strength, grid.shape), lstate)
+    yield from Stepper(scene, response, start)
 
 
 def _crack_length(law, state, load, area, width, l0):
@@ -108,6 +203,7 @@ def _crack_length(law, state, load, area, width, l0):
 
 
 def check_finite(n, t, v, grid):
+    """Raise SimulationError naming the step, time and first node where v is not finite."""
     for c, vc in v.items():
         if not np.isfinite(vc).all():
             i, k = np.unravel_index(np.argmax(~np.isfinite(vc)), vc.shape)

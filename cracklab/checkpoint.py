@@ -1,0 +1,267 @@
+"""Checkpoints of long runs and the checks on a run's Zarr store.
+
+A checkpoint is one ``.npz`` file, ``<store>/_checkpoint/state.npz``, holding the full
+solver state after some step n (stepper locals, the Response and its history engines,
+the recorder's station series and rupture times) and the number of snapshots the store
+held when it was written. It is written to a temporary file in the same directory,
+flushed to disk and moved over the previous one with ``os.replace``: a kill leaves
+either the previous checkpoint or the new one. The run's store has its final size from
+the start (snapshots NaN until written); snapshots written after the checkpoint are
+written again, with the same values, when the run resumes.
+
+Nested states (dicts of arrays, numbers, strings and None; int or str keys) are stored
+without pickle: arrays as npz members, the rest as one JSON document.
+"""
+from __future__ import annotations
+
+import errno
+import hashlib
+import json
+import os
+import shutil
+import time
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import StoreError
+
+RUN_FORMAT = 1          # attr ``cracklab_run_format`` of a run store
+CHECKPOINT_FORMAT = 1   # layout of the checkpoint file
+GROUP = "_checkpoint"
+FILE = "state.npz"
+# test hook only: seconds to sleep inside a checkpoint write, with the new file written
+# but not yet moved into place (lets a test SIGKILL the run in the middle of a write)
+_SLEEP_ENV = "CRACKLAB_TEST_CHECKPOINT_SLEEP"
+
+
+# ----------------------------------------------------------------------------- encoding
+def _encode(obj, arrays: dict):
+    if isinstance(obj, dict):
+        items = []
+        for k, v in obj.items():
+            if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer, str)):
+                raise TypeError(f"checkpoint state keys must be int or str, got {k!r}")
+            items.append(["i" if isinstance(k, (int, np.integer)) else "s",
+                          int(k) if isinstance(k, (int, np.integer)) else k, _encode(v, arrays)])
+        return {"dict": items}
+    if isinstance(obj, (list, tuple)):
+        return {"list": [_encode(v, arrays) for v in obj]}
+    if isinstance(obj, np.ndarray) or isinstance(obj, np.generic) and not isinstance(
+            obj, (np.integer, np.floating, np.bool_)):
+        a = np.asarray(obj)
+        if a.dtype == object:
+            raise TypeError("checkpoint state arrays must not have dtype object")
+        name = f"a{len(arrays)}"
+        arrays[name] = a
+        return {"array": name}
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return {"float": float(obj).hex()}   # exact, and inf / nan safe
+    raise TypeError(f"cannot checkpoint a value of type {type(obj).__name__}")
+
+
+def _decode(obj, arrays):
+    if isinstance(obj, dict):
+        if "dict" in obj:
+            return {(int(k) if t == "i" else k): _decode(v, arrays) for t, k, v in obj["dict"]}
+        if "list" in obj:
+            return [_decode(v, arrays) for v in obj["list"]]
+        if "array" in obj:
+            return np.array(arrays[obj["array"]])
+        if "float" in obj:
+            return float.fromhex(obj["float"])
+    return obj
+
+
+def _sleep_hook():
+    delay = os.environ.get(_SLEEP_ENV)
+    if delay:
+        time.sleep(float(delay))
+
+
+def write(path, state: dict) -> float:
+    """Atomically write ``state`` to the checkpoint file of store ``path``; return seconds taken."""
+    t0 = time.perf_counter()
+    d = Path(path) / GROUP
+    d.mkdir(exist_ok=True)
+    if not (d / "zarr.json").exists():
+        # a Zarr group: readers of the store then ignore the directory silently
+        (d / "zarr.json").write_text('{"zarr_format": 3, "node_type": "group", "attributes": {}}')
+    arrays: dict = {}
+    meta = json.dumps({"checkpoint_format": CHECKPOINT_FORMAT, "state": _encode(state, arrays)})
+    tmp = d / f"{FILE}.{os.getpid()}.tmp"
+    try:
+        with open(tmp, "wb") as fh:
+            np.savez(fh, __meta__=np.frombuffer(meta.encode(), dtype=np.uint8), **arrays)
+            fh.flush()
+            os.fsync(fh.fileno())
+        _sleep_hook()
+        os.replace(tmp, d / FILE)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    try:  # make the rename itself durable
+        fd = os.open(d, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+    except OSError:
+        pass
+    return time.perf_counter() - t0
+
+
+def read(path) -> dict | None:
+    """The checkpoint of store ``path`` (None when there is none)."""
+    f = Path(path) / GROUP / FILE
+    if not f.exists():
+        return None
+    try:
+        with np.load(f, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        meta = json.loads(arrays.pop("__meta__").tobytes().decode())
+    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
+        raise StoreError(path, f"its checkpoint {f} is unreadable ({exc}); run again without resume") from None
+    if meta.get("checkpoint_format") != CHECKPOINT_FORMAT:
+        raise StoreError(path, f"its checkpoint has format {meta.get('checkpoint_format')!r}, this cracklab "
+                               f"reads format {CHECKPOINT_FORMAT}; run again without resume")
+    return _decode(meta["state"], arrays)
+
+
+def remove(path) -> None:
+    """Delete the checkpoint of store ``path`` (after the run finished)."""
+    shutil.rmtree(Path(path) / GROUP, ignore_errors=True)
+
+
+def scene_digest(scene_json: str, inputs: dict) -> str:
+    """A hash of a scene (its JSON and input arrays): a resume must run the same scene."""
+    h = hashlib.sha256(scene_json.encode())
+    for k in sorted(inputs):
+        a = np.ascontiguousarray(inputs[k])
+        h.update(k.encode() + str(a.dtype).encode() + str(a.shape).encode() + a.tobytes())
+    return h.hexdigest()
+
+
+# ----------------------------------------------------------------------------- the store
+def local_path(store):
+    """The filesystem path of ``store`` (None for Zarr store objects and URLs)."""
+    if isinstance(store, (str, os.PathLike)):
+        s = os.fspath(store)
+        if "://" not in s:
+            return Path(s).expanduser()
+    return None
+
+
+def inspect(path) -> tuple[str, dict]:
+    """(kind, attrs) of a store path: kind is "absent", "empty" (an empty directory or
+    Zarr group), "run" (a single cracklab run), "ensemble" or "other"."""
+    p = Path(path)
+    if not p.exists():
+        return "absent", {}
+    if not p.is_dir():
+        return "other", {}
+    try:
+        entries = [e for e in os.listdir(p)]
+    except OSError as exc:
+        raise StoreError(path, f"cannot be read ({os.strerror(exc.errno) if exc.errno else exc})") from None
+    if not entries:
+        return "empty", {}
+    import zarr
+
+    try:
+        g = zarr.open_group(str(p), mode="r")
+        attrs = dict(g.attrs)
+        members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
+    except Exception:  # noqa: BLE001 - not a Zarr group
+        return "other", {}
+    if "cracklab_ensemble" in attrs:
+        return "ensemble", attrs
+    if "scene" in attrs or "cracklab_run_format" in attrs:
+        return "run", attrs
+    return ("empty", attrs) if not members else ("other", attrs)
+
+
+def check_writable_target(path) -> None:
+    """Refuse to overwrite a path that is not a cracklab run store (or empty)."""
+    kind, _ = inspect(path)
+    if kind == "ensemble":
+        raise StoreError(path, "is an ensemble store (cracklab sweep); a single run needs its own path")
+    if kind == "other":
+        raise StoreError(path, "exists and is not a cracklab run store (nor empty); refusing to overwrite "
+                               "it: choose another output path or delete it")
+
+
+def check_resumable(path, version: str) -> tuple[dict, dict | None]:
+    """(attrs, checkpoint) of a run store to resume; raise StoreError when it cannot be."""
+    kind, attrs = inspect(path)
+    if kind in ("absent", "empty"):
+        return attrs, None
+    if kind != "run":
+        raise StoreError(path, f"is not a cracklab run store ({'an ensemble store' if kind == 'ensemble' else 'unknown content'}); "
+                               "cannot resume from it")
+    fmt = attrs.get("cracklab_run_format")
+    if fmt != RUN_FORMAT:
+        raise StoreError(path, f"was written by cracklab {attrs.get('cracklab_version', '?')} with store format "
+                               f"{fmt if fmt is not None else '0 (no cracklab_run_format attr)'}; this cracklab "
+                               f"({version}) resumes format {RUN_FORMAT} only: run again without resume")
+    ck = read(path)
+    if ck is not None and ck.get("cracklab_version") != version:
+        raise StoreError(path, f"its checkpoint was written by cracklab {ck.get('cracklab_version')}, this is "
+                               f"cracklab {version}: resume with that version or run again without resume")
+    return attrs, ck
+
+
+def _t_arrays(g):
+    for name in list(g.array_keys()):
+        arr = g[name]
+        dims = getattr(arr.metadata, "dimension_names", None) or arr.attrs.get("_ARRAY_DIMENSIONS") or ()
+        yield name, arr, tuple(dims)
+
+
+def prepare_resume(path, t_all) -> None:
+    """Put the store of a killed run back in shape to continue: snapshot variables at
+    their full length (their values past the checkpoint are rewritten as the run goes
+    on), without what the end of a run writes (station series, rupture time), without
+    temporary files."""
+    import zarr
+
+    g = zarr.open_group(str(path), mode="a")
+    for name, arr, dims in _t_arrays(g):
+        if dims and dims[0] == "t":
+            if arr.shape[0] != len(t_all):
+                arr.resize((len(t_all),) + tuple(arr.shape[1:]))
+                if name == "t":
+                    arr[:] = t_all
+        elif dims and (dims[0] in ("station", "t_station") or name == "rupture_time"):
+            del g[name]
+    for tmp in Path(path).rglob("*.partial"):
+        tmp.unlink(missing_ok=True)
+    for tmp in (Path(path) / GROUP).glob("*.tmp"):
+        tmp.unlink(missing_ok=True)
+
+
+def cut_snapshots(store, nsnap: int) -> None:
+    """Shorten the snapshot variables of a run store to the first ``nsnap`` (a failed run)."""
+    import zarr
+
+    g = zarr.open_group(str(store) if isinstance(store, (str, os.PathLike)) else store, mode="a")
+    for _, arr, dims in _t_arrays(g):
+        if dims and dims[0] == "t" and arr.shape[0] != nsnap:
+            arr.resize((nsnap,) + tuple(arr.shape[1:]))
+
+
+def store_error(path, exc: OSError, doing: str) -> StoreError:
+    """One clear StoreError for an OSError met while writing the store."""
+    code = getattr(exc, "errno", None)
+    why = {errno.ENOSPC: "no space left on device", errno.EDQUOT: "disk quota exceeded",
+           errno.EACCES: "permission denied (read-only location?)", errno.EPERM: "operation not permitted "
+           "(read-only location?)", errno.EROFS: "read-only file system"}.get(code) or \
+        (os.strerror(code) if code else str(exc))
+    return StoreError(path, f"{why} while {doing}")
