@@ -542,11 +542,17 @@ class ExponentialEngine:
             out[f"buf{i}"] = g[3]
         return out
 
+    _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n")
+
     def get_state(self) -> dict:
-        """The dynamic state (step count, direct-tap buffers, recursive states), copied."""
+        """The dynamic state (step count, direct-tap buffers, recursive states, and the powers
+        weight() and start_weight() advance from call to call), copied."""
         out = {k: a.copy() for k, a in self._state_arrays().items()}
         out["n"] = self.n
         out["layout"] = self.backend
+        for k in self._CACHES:
+            v = getattr(self, k, None)
+            out["cache" + k] = v.copy() if isinstance(v, np.ndarray) else v
         return out
 
     def set_state(self, state: dict) -> None:
@@ -557,6 +563,10 @@ class ExponentialEngine:
         for k, a in self._state_arrays().items():
             a[...] = state[k]
         self.n = int(state["n"])
+        for k in self._CACHES:
+            if "cache" + k in state:
+                v = state["cache" + k]
+                setattr(self, k, np.array(v) if isinstance(v, np.ndarray) else v)
 
     def push(self, x: np.ndarray) -> np.ndarray:
         """Push x_n (shape of gamma) and return S_n = sum_j w_{j+lag} x_{n-j} (same shape)."""
