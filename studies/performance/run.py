@@ -1,0 +1,71 @@
+"""Benchmarks of the performance issue, each a `cracklab bench` command; writes a JSON and a
+markdown table (docs/performance.md quotes it).
+
+    .venv/bin/python studies/performance/run.py [--quick] [--out out/performance]
+
+Each row runs in its own process (`cracklab bench --json`), so peak memory is per row.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+# (n1, n3, mode, steps, engine)
+ROWS = [
+    (128, 128, "I", 100, "exponential"),
+    (128, 128, "I", 1000, "exponential"),
+    (128, 128, "I", 10000, "exponential"),
+    (256, 256, "I", 2000, "exponential"),
+    (512, 512, "I", 2000, "exponential"),
+    (512, 512, "shear", 2000, "exponential"),
+    (256, 256, "I", 400, "direct"),
+]
+QUICK = [(128, 128, "I", 100, "exponential"), (128, 128, "I", 400, "exponential")]
+TARGETS = {(256, 256, "I"): 2.0, (512, 512, "I"): 8.0, (512, 512, "shear"): 16.0}
+
+
+def bench(n1, n3, mode, steps, engine, threads):
+    cmd = [sys.executable, "-m", "cracklab.cli", "bench", "--n1", str(n1), "--n3", str(n3), "--mode", mode,
+           "--steps", str(steps), "--engine", engine, "--threads", str(threads), "--json"]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    res["command"] = "cracklab bench " + " ".join(cmd[4:])
+    return res
+
+
+def table(results) -> str:
+    lines = ["| grid | mode | steps | engine | ms / step | us / point / step | FFT pair ms | "
+             "ratio to FFT pair | peak RSS MB | target ms |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        tgt = TARGETS.get((r["n1"], r["n3"], r["mode"]))
+        lines.append(f"| {r['n1']} x {r['n3']} | {r['mode']} | {r['steps']} | {r['engine']} | "
+                     f"{r['ms_per_step']:.2f} | {r['us_per_point_per_step']:.3f} | {r['fft_pair_ms']:.2f} | "
+                     f"{r['ms_per_step'] / r['fft_pair_ms']:.1f} | {r['peak_rss_mb']:.0f} | "
+                     f"{'' if tgt is None else tgt} |")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="two small rows only")
+    ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--out", default="out/performance")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    results = []
+    for row in (QUICK if args.quick else ROWS):
+        print("cracklab bench", row, flush=True)
+        results.append(bench(*row, threads=args.threads))
+        print(f"  {results[-1]['ms_per_step']:.2f} ms/step", flush=True)
+    (out / "bench.json").write_text(json.dumps(results, indent=1))
+    (out / "bench.md").write_text(table(results) + "\n")
+    print(table(results))
+
+
+if __name__ == "__main__":
+    main()
