@@ -21,7 +21,8 @@ rounded up to a small set of levels, and >= lag + 1):
   ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = Re sum_p e_p s_p``.
 
 Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the per-step recursion in one
-parallel pass over the modes; "numba-block" advances the states ``BLOCK`` = 8 steps at a
+parallel pass over the modes, the states split into real and imaginary arrays with the
+terms innermost (the term loop vectorises); "numba-block" advances the states ``BLOCK`` = 8 steps at a
 time (once every 8 steps per mode, staggered over the modes; in between, S_n adds the
 fitted weights of the steps since the last block update to the direct taps and reads the
 precomputed ``Re sum_p e_p rho_p^r s_p``, r < 8), which reads and writes the states once
