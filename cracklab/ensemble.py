@@ -606,33 +606,38 @@ def store_lock(store: str):
     Path(store).mkdir(parents=True, exist_ok=True)
     me = {"host": socket.gethostname(), "pid": os.getpid(), "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
           "token": os.urandom(8).hex()}
-    for _ in range(5):
-        try:
-            fd = os.open(path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
-        except FileExistsError:
-            info = _read_lock(path)
-            if info is None:
-                continue                      # released meanwhile: try again
-            if _lock_is_stale(path, info):
-                stale = path.with_name(f"{LOCK_NAME}.stale-{os.getpid()}-{os.urandom(3).hex()}")
-                try:
-                    os.replace(path, stale)   # atomic: one of several contenders wins
-                    if _read_lock(stale) != info:   # we moved a fresh lock: put it back
-                        os.replace(stale, path)
-                        continue
-                    stale.unlink()
-                except FileNotFoundError:
-                    pass
-                continue
-            holder = f"pid {info.get('pid')} on {info.get('host')}" if info else "another process"
-            since = f", since {info['started']}" if info.get("started") else ""
-            raise StoreLocked("store", f"{store} is in use by another sweep ({holder}{since}); wait for it "
-                                       f"to finish, or, if no sweep is running, delete {path}") from None
-        with os.fdopen(fd, "w") as fh:
-            json.dump(me, fh)
-        break
-    else:
-        raise StoreLocked("store", f"{store}: could not take the sweep lock {path}")
+    # the lock appears with its content: written to a private file, then hard-linked into
+    # place (atomic, and it fails when the lock exists), so no reader sees an empty lock
+    tmp = path.with_name(f"{LOCK_NAME}.{os.getpid()}-{me['token']}.tmp")
+    tmp.write_text(json.dumps(me))
+    try:
+        for _ in range(5):
+            try:
+                os.link(tmp, path)
+            except FileExistsError:
+                info = _read_lock(path)
+                if info is None:
+                    continue                      # released meanwhile: try again
+                if _lock_is_stale(path, info):
+                    stale = path.with_name(f"{LOCK_NAME}.stale-{os.getpid()}-{os.urandom(3).hex()}")
+                    try:
+                        os.replace(path, stale)   # atomic: one of several contenders wins
+                        if _read_lock(stale) != info:   # we moved a fresh lock: put it back
+                            os.replace(stale, path)
+                            continue
+                        stale.unlink()
+                    except FileNotFoundError:
+                        pass
+                    continue
+                holder = f"pid {info.get('pid')} on {info.get('host')}" if info else "another process"
+                since = f", since {info['started']}" if info.get("started") else ""
+                raise StoreLocked("store", f"{store} is in use by another sweep ({holder}{since}); wait for it "
+                                           f"to finish, or, if no sweep is running, delete {path}") from None
+            break
+        else:
+            raise StoreLocked("store", f"{store}: could not take the sweep lock {path}")
+    finally:
+        tmp.unlink(missing_ok=True)
     try:
         yield path
     finally:
