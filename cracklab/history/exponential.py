@@ -22,12 +22,10 @@ rounded up to a small set of levels, and >= lag + 1):
 
 Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the per-step recursion in one
 parallel pass over the modes, the states split into real and imaginary arrays with the
-terms innermost (the term loop vectorises); "numba-block" advances the states ``BLOCK`` = 8 steps at a
-time (once every 8 steps per mode, staggered over the modes; in between, S_n adds the
-fitted weights of the steps since the last block update to the direct taps and reads the
-precomputed ``Re sum_p e_p rho_p^r s_p``, r < 8), which reads and writes the states once
-per block but measured 10-15 % slower here (docs/performance.md); "numpy" runs the
-per-step recursion vectorised over the modes.  All three give the same sums to round-off.  The product
+terms innermost (the term loop vectorises); "numpy" runs the same recursion vectorised
+over the modes.  A variant that advanced the states 8 steps at a time (states read once
+per block) measured 10-15 % slower and was dropped (docs/fast_engine.md).
+Both give the same sums to round-off.  The product
 rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
 
 Memory per mode is fixed at construction (about 2 P complex states, Jd + 8 buffered values,
@@ -129,103 +127,7 @@ def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
 
 
 # ----------------------------------------------------------------------------- numba kernel
-#: block length of the numba backend: the recursive states of a mode are advanced B steps
-#: at a time (once every B steps, staggered over the modes), see ``_numba_push``
-BLOCK = 8
 _CHUNKS = 64
-
-
-def _numba_push():
-    """The fused per-step loop, compiled with numba (None if numba is unavailable)."""
-    try:
-        import numba
-    except Exception:  # pragma: no cover - numba is a dependency, but keep numpy working
-        return None
-
-    @numba.njit(cache=True, nogil=True, parallel=True, fastmath=False)
-    def push(x, n, order, us, start, L_u, wstart_u, w, buf, rr_u, ri_u, er_u, ei_u, sr, si, yr, yi, out):
-        """One step for every mode (modes sorted by unique gamma u; ring of L_u = Jd + B values).
-
-        Mode i with last block update at step n - r (r = (n + u) % B) has states
-        sigma_p = s_p(n - r) and the outputs y_k = Re sum_p e_p rho_p^k sigma_p, k < B; then
-        S_n = sum_{j < Jd + r} w_j x_{n-j} + y_r, with w_j exact for j < Jd and fitted
-        (Re sum_p e_p rho_p^(j - Jd)) beyond: the same sum as the per-step recursion
-        s_p(n) = rho_p s_p(n-1) + x_{n-Jd}, with the states read and written once per block.
-        """
-        m_all = order.size
-        ph = rr_u.shape[1]
-        B = yr.shape[1]
-        for c in numba.prange(_CHUNKS):
-            tar = np.empty(ph)
-            tai = np.empty(ph)
-            tbr = np.empty(ph)
-            tbi = np.empty(ph)
-            for i in range(c * m_all // _CHUNKS, (c + 1) * m_all // _CHUNKS):
-                m = order[i]
-                u = us[i]
-                L = L_u[u]
-                b0 = start[i]
-                w0 = wstart_u[u]
-                jd = L - B
-                p0 = n % L
-                buf[b0 + p0] = x[m]
-                r = (n + u) % B
-                if r == 0:
-                    # advance the states by B steps: inputs x_{n-Jd-B+1} .. x_{n-Jd}, oldest first
-                    for k in range(B - 1, -1, -1):
-                        v = buf[b0 + (n - jd - k) % L]
-                        xr = v.real
-                        xi = v.imag
-                        for p in range(ph):
-                            rr = rr_u[u, p]
-                            ri = ri_u[u, p]
-                            a = sr[i, 0, p]
-                            b = si[i, 0, p]
-                            sr[i, 0, p] = a * rr - b * ri + xr
-                            si[i, 0, p] = a * ri + b * rr
-                            a = sr[i, 1, p]
-                            b = si[i, 1, p]
-                            sr[i, 1, p] = a * rr - b * ri + xi
-                            si[i, 1, p] = a * ri + b * rr
-                    for p in range(ph):
-                        er = er_u[u, p]
-                        ei = ei_u[u, p]
-                        tar[p] = er * sr[i, 0, p] - ei * si[i, 0, p]
-                        tai[p] = er * si[i, 0, p] + ei * sr[i, 0, p]
-                        tbr[p] = er * sr[i, 1, p] - ei * si[i, 1, p]
-                        tbi[p] = er * si[i, 1, p] + ei * sr[i, 1, p]
-                    for k in range(B):
-                        s1 = 0.0
-                        s2 = 0.0
-                        for p in range(ph):
-                            rr = rr_u[u, p]
-                            ri = ri_u[u, p]
-                            s1 += tar[p]
-                            s2 += tbr[p]
-                            a = tar[p]
-                            b = tai[p]
-                            tar[p] = a * rr - b * ri
-                            tai[p] = a * ri + b * rr
-                            a = tbr[p]
-                            b = tbi[p]
-                            tbr[p] = a * rr - b * ri
-                            tbi[p] = a * ri + b * rr
-                        yr[i, k] = s1
-                        yi[i, k] = s2
-                accr = yr[i, r]
-                acci = yi[i, r]
-                q = p0
-                for j in range(jd + r):  # taps: w_j x_{n-j}
-                    v = buf[b0 + q]
-                    wj = w[w0 + j]
-                    accr += wj * v.real
-                    acci += wj * v.imag
-                    q -= 1
-                    if q < 0:
-                        q += L
-                out[m] = complex(accr, acci)
-
-    return push
 
 
 def _numba_step():
@@ -326,14 +228,6 @@ def _power_sum(pw, rho, coef, factor, out):
 
 
 _POWER_SUM = None
-_NUMBA = None
-
-
-def _get_numba():
-    global _NUMBA
-    if _NUMBA is None:
-        _NUMBA = _numba_push() or False
-    return _NUMBA or None
 
 
 def _set_threads(threads):
@@ -346,18 +240,19 @@ _STEP = None
 
 
 def _get_step():
+    """The compiled per-step loop (None if numba is unavailable)."""
     global _STEP
     if _STEP is None:
-        _STEP = _numba_step()
-    return _STEP
+        _STEP = _numba_step() or False
+    return _STEP or None
 
 
 def _backend_choice():
-    """"numba" (per-step loop, the default), "numba-block" (blocked loop) or "numpy"."""
+    """"numba" (the default when numba imports) or "numpy"."""
     env = os.environ.get("CRACKLAB_EXP_BACKEND", "").strip().lower()
-    if env in ("numpy", "numba", "numba-block"):
+    if env in ("numpy", "numba"):
         return env
-    return "numba" if _get_numba() is not None else "numpy"
+    return "numba" if _get_step() is not None else "numpy"
 
 
 # ----------------------------------------------------------------------------- engine
@@ -462,38 +357,6 @@ class ExponentialEngine:
             self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
             self._sr = np.zeros((m, 2, self.pairs))
             self._si = np.zeros((m, 2, self.pairs))
-        elif self.backend == "numba-block":
-            self._push_nb = _get_numba()
-            B = BLOCK
-            order = np.argsort(inv, kind="stable")
-            us = inv[order].astype(np.int64)
-            self._order, self._us = order.astype(np.int64), us
-            self._L_u = np.ascontiguousarray(jd_u + B, dtype=np.int64)
-            # taps per unique gamma: exact w_{lag+j} (j < Jd), then the fitted weights of the
-            # partial block, Re sum_p e_p rho_p^i (i < B - 1)
-            pw = e_u[:, None, :] * rho_u[:, None, :] ** np.arange(B - 1)[None, :, None]
-            wfit = pw.sum(axis=2).real  # (U, B - 1)
-            self._wtstart_u = np.zeros(ug.size, dtype=np.int64)
-            if ug.size:
-                self._wtstart_u[1:] = np.cumsum(self._L_u - 1)[:-1]
-            wt = np.empty(int((self._L_u - 1).sum()))
-            for u in range(ug.size):
-                a = self._wtstart_u[u]
-                J = int(jd_u[u])
-                wt[a:a + J] = self._wflat[self._wstart_u[u]:self._wstart_u[u] + J]
-                wt[a + J:a + J + B - 1] = wfit[u]
-            self._wt = wt
-            L_sorted = self._L_u[us]
-            self._start = np.zeros(m, dtype=np.int64)
-            if m:
-                self._start[1:] = np.cumsum(L_sorted)[:-1]
-            self._buf = np.zeros(int(L_sorted.sum()), dtype=complex)
-            self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
-            self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
-            self._sr = np.zeros((m, 2, self.pairs))
-            self._si = np.zeros((m, 2, self.pairs))
-            self._yr = np.zeros((m, B))
-            self._yi = np.zeros((m, B))
         else:
             # permute the modes so that each level of Jd is a contiguous block
             jd = jd_u[inv]
@@ -531,9 +394,6 @@ class ExponentialEngine:
         if self.backend == "numba":
             arrs = [self._buf, self._wflat, self._rr, self._ri, self._er, self._ei, self._sr, self._si,
                     self._order, self._us, self._start]
-        elif self.backend == "numba-block":
-            arrs = [self._buf, self._wflat, self._wt, self._rr, self._ri, self._er, self._ei, self._sr,
-                    self._si, self._yr, self._yi, self._order, self._us, self._start]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -544,8 +404,6 @@ class ExponentialEngine:
         """Shapes of every state array (for checking that nothing grows with n)."""
         if self.backend == "numba":
             arrs = [self._buf, self._rr, self._er, self._sr, self._si]
-        elif self.backend == "numba-block":
-            arrs = [self._buf, self._rr, self._er, self._sr, self._si, self._yr]
         else:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
         return [a.shape for a in arrs]
@@ -553,8 +411,6 @@ class ExponentialEngine:
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
             return {"buf": self._buf, "sr": self._sr, "si": self._si}
-        if self.backend == "numba-block":
-            return {"buf": self._buf, "sr": self._sr, "si": self._si, "yr": self._yr, "yi": self._yi}
         out = {"sig": self._sig}
         for i, g in enumerate(self._groups):
             out[f"buf{i}"] = g[3]
@@ -601,14 +457,6 @@ class ExponentialEngine:
             self._push_nb(x, n, self._order, self._us, self._start, self._jd_u_i, self._wstart_u,
                           self._wflat, self._buf, self._rr, self._ri, self._er, self._ei, self._sr,
                           self._si, out)
-            self.n = n + 1
-            return out.reshape(self.shape)
-        if self.backend == "numba-block":
-            out = np.empty(x.size, dtype=complex)
-            _set_threads(self.threads)
-            self._push_nb(x, n, self._order, self._us, self._start, self._L_u, self._wtstart_u, self._wt,
-                          self._buf, self._rr, self._ri, self._er, self._ei, self._sr, self._si,
-                          self._yr, self._yi, out)
             self.n = n + 1
             return out.reshape(self.shape)
         xp, xin, S = self._xp, self._xin, self._S
