@@ -58,6 +58,7 @@ from . import kernels
 from .errors import InputError
 from .laws import LinearCohesive, SlipWeakening
 from .record import Record
+from .response import active_channels, split_channels
 
 __all__ = ["energy_record", "energy_budget", "strain_energy", "static_stiffness", "budget_summary"]
 
@@ -118,13 +119,7 @@ class _Spectral:
         self.dA = grid.dx1 * (1.0 if grid.plane else grid.dx3)
         self.shear3d = (not grid.plane) and any(c in comps for c in (1, 3))
         nu = material.nu
-        self.channels = []
-        if 2 in comps:
-            self.channels.append("I")
-        if self.shear3d or 1 in comps:
-            self.channels.append("II")
-        if self.shear3d or 3 in comps:
-            self.channels.append("III")
+        self.channels = active_channels(grid.plane, comps)
         self.K = {ch: 0.5 * material.mu * q * kernels.static_integral(ch, nu) for ch in self.channels}
 
     def forward(self, a):
@@ -135,18 +130,7 @@ class _Spectral:
         return X
 
     def split(self, X: dict) -> dict:
-        out = {}
-        if "I" in self.channels:
-            out["I"] = X[2]
-        if self.shear3d:
-            out["II"] = self.c * X[1] + self.s * X[3]
-            out["III"] = -self.s * X[1] + self.c * X[3]
-        else:
-            if "II" in self.channels:
-                out["II"] = X[1]
-            if "III" in self.channels:
-                out["III"] = X[3]
-        return out
+        return split_channels(X, self.channels, self.shear3d, self.c, self.s)
 
     def dot(self, A, B):
         """int a b dA from the half spectra of a and b (sums over the last two axes)."""

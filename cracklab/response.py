@@ -29,6 +29,35 @@ from .kernels import Z as Z_kernel
 from .spectral import Transforms
 
 
+def active_channels(plane: bool, components) -> tuple:
+    """The kernels a set of components needs: I for component 2; in 3D, II and III for any
+    shear component (the rotation of Eq. 28 mixes them); in the plane, II for 1, III for 3."""
+    shear3d = (not plane) and any(c in components for c in (1, 3))
+    out = ("I",) if 2 in components else ()
+    if shear3d or 1 in components:
+        out += ("II",)
+    if shear3d or 3 in components:
+        out += ("III",)
+    return out
+
+
+def split_channels(X: dict, channels, shear3d: bool, c, s) -> dict:
+    """Component spectra -> channel spectra (rotation of Eq. 28 for 3D shear; ``c``, ``s``
+    are k1/q and k3/q on the spectral layout of X)."""
+    out = {}
+    if "I" in channels:
+        out["I"] = X[2]
+    if shear3d:
+        out["II"] = c * X[1] + s * X[3]
+        out["III"] = -s * X[1] + c * X[3]
+    else:
+        if "II" in channels:
+            out["II"] = X[1]
+        if "III" in channels:
+            out["III"] = X[3]
+    return out
+
+
 @dataclass
 class _Channel:
     kernel: str
@@ -78,13 +107,8 @@ class Response:
                 ch.K = ch.pre * (w0 - 0.5 * z0)
             return ch
 
-        self.channels: dict[str, _Channel] = {}
-        if 2 in self.components:
-            self.channels["I"] = channel("I")
-        if self.shear3d or 1 in self.components:
-            self.channels["II"] = channel("II")
-        if self.shear3d or 3 in self.components:
-            self.channels["III"] = channel("III")
+        self.channels: dict[str, _Channel] = {name: channel(name)
+                                              for name in active_channels(grid.plane, self.components)}
         self.n = 0
 
     @classmethod
@@ -116,19 +140,7 @@ class Response:
 
     # -- spectral helpers ------------------------------------------------------------
     def _split(self, X: dict) -> dict:
-        """Component spectra -> channel spectra (rotation of Eq. 28 for 3D shear)."""
-        out = {}
-        if "I" in self.channels:
-            out["I"] = X[2]
-        if self.shear3d:
-            out["II"] = self.c * X[1] + self.s * X[3]
-            out["III"] = -self.s * X[1] + self.c * X[3]
-        else:
-            if "II" in self.channels:
-                out["II"] = X[1]
-            if "III" in self.channels:
-                out["III"] = X[3]
-        return out
+        return split_channels(X, self.channels, self.shear3d, self.c, self.s)
 
     def _join(self, F: dict) -> dict:
         out = {}
