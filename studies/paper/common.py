@@ -57,6 +57,29 @@ class Timer:
         return _Section()
 
 
+def simulate_or_reuse(sc, store, timer, reuse, label):
+    """Run ``sc`` into ``store`` (timed as "simulate"), or, with ``reuse``, open the store of
+    an earlier run and take its recorded run time."""
+    import shutil
+
+    import xarray as xr
+    from cracklab import simulate
+
+    runtime = store.with_name(store.stem + "_runtime.json")
+    if reuse and store.exists() and runtime.exists():
+        timer.seconds["simulate"] = json.loads(runtime.read_text())["simulate"]
+        return xr.open_zarr(str(store), consolidated=False)
+    if store.exists():
+        shutil.rmtree(store)
+    store.parent.mkdir(parents=True, exist_ok=True)
+    t0 = time.perf_counter()
+    with timer("simulate"):
+        ds = simulate(sc, store=str(store))
+    runtime.write_text(json.dumps({"simulate": timer.seconds["simulate"], "steps": sc.nsteps}))
+    print(f"{label}: {sc.nsteps} steps in {time.perf_counter() - t0:.1f} s")
+    return ds
+
+
 def machine():
     import os
 

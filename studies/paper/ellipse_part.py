@@ -17,12 +17,10 @@ the simulation should reach, without the infinite-domain assumption).
 from __future__ import annotations
 
 import math
-import shutil
-import time
 
 import numpy as np
 
-from .common import OUT, Timer, machine, plt, read_summary, save, table, write_page, write_summary
+from .common import OUT, Timer, simulate_or_reuse, machine, plt, read_summary, save, table, write_page, write_summary
 
 N = 512
 BETA = 0.5
@@ -215,27 +213,11 @@ def engine_check(n=128, t_end=STEPS * BETA / N):
 
 def run(n=N, steps=STEPS, store=STORE, write_docs=True, reuse=False):
     """Simulate (or, with ``reuse``, read the existing store), analyse, draw, write the page."""
-    from cracklab import simulate
-
-    import json
-
     import xarray as xr
 
     timer = Timer()
     sc = scene(n=n, steps=steps)
-    runtime = store.with_name(store.stem + "_runtime.json")
-    if reuse and store.exists() and runtime.exists():
-        ds = xr.open_zarr(str(store), consolidated=False)
-        timer.seconds["simulate"] = json.loads(runtime.read_text())["simulate"]
-    else:
-        if store.exists():
-            shutil.rmtree(store)
-        store.parent.mkdir(parents=True, exist_ok=True)
-        t0 = time.perf_counter()
-        with timer("simulate"):
-            ds = simulate(sc, store=str(store))
-        runtime.write_text(json.dumps({"simulate": timer.seconds["simulate"], "steps": sc.nsteps}))
-        print(f"ellipse: {sc.nsteps} steps in {time.perf_counter() - t0:.1f} s")
+    ds = simulate_or_reuse(sc, store, timer, reuse, "ellipse")
     with timer("analysis"):
         res, data = analyse(ds, sc)
         static_d = data[5]

@@ -10,12 +10,10 @@ delta_2 = 2 P G(tau) / (pi mu r), tau = c_s t / r, static value 3 P / (4 pi mu r
 from __future__ import annotations
 
 import math
-import shutil
-import time
 
 import numpy as np
 
-from .common import OUT, Timer, fmt, machine, plt, read_summary, save, table, write_page, write_summary
+from .common import OUT, Timer, simulate_or_reuse, fmt, machine, plt, read_summary, save, table, write_page, write_summary
 
 N = 512
 BETA = 0.5
@@ -182,27 +180,11 @@ def field_profile_error(field, sc, t):
 
 def run(n=N, steps=STEPS, store=STORE, write_docs=True, reuse=False):
     """Simulate (or, with ``reuse``, read the existing store), analyse, draw, write the page."""
-    from cracklab import simulate
-
-    import json
-
     import xarray as xr
 
     timer = Timer()
     sc = scene(n=n, steps=steps)
-    runtime = store.with_name(store.stem + "_runtime.json")
-    if reuse and store.exists() and runtime.exists():
-        ds = xr.open_zarr(str(store), consolidated=False)
-        timer.seconds["simulate"] = json.loads(runtime.read_text())["simulate"]
-    else:
-        if store.exists():
-            shutil.rmtree(store)
-        store.parent.mkdir(parents=True, exist_ok=True)
-        t0 = time.perf_counter()
-        with timer("simulate"):
-            ds = simulate(sc, store=str(store))
-        runtime.write_text(json.dumps({"simulate": timer.seconds["simulate"], "steps": sc.nsteps}))
-        print(f"lamb: {sc.nsteps} steps in {time.perf_counter() - t0:.1f} s")
+    ds = simulate_or_reuse(sc, store, timer, reuse, "lamb")
     with timer("analysis"):
         res, exact = analyse(ds, sc)
         names = list(ds.station.values)
