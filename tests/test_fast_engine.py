@@ -354,3 +354,29 @@ def test_product_scheme_single_wave_at_the_50th_rayleigh_period(mode, gamma):
         ref = max(np.sqrt(2.0 / (np.pi * T[win])).max(), np.abs(r["direct"][win]).max())
     assert np.all(np.isfinite(r["exponential"]))
     assert np.max(np.abs(r["exponential"][win] - r["direct"][win])) / ref <= 1e-3
+
+
+@pytest.mark.parametrize("kernel", ["I", "II", "III"])
+def test_product_start_weight_against_the_exact_start_term(kernel):
+    """start_weight(n), the product rule's E_0(n) on the first velocity, against
+    cracklab.modal.product_weights(part="start0") (Gauss-Legendre on the closed-form Z):
+    exact (1e-12) below J0 and for gamma = 0 (a constant kernel: E_0 = -Z(0)/2 for every
+    n >= 1), within the fit's tolerance (1e-4 of Z(0)) beyond, over 400 consecutive calls
+    (the powers are advanced by one multiplication per call)."""
+    from cracklab.modal import product_weights
+
+    gam = np.array([0.0, 0.05, 0.3, 1.0, 2.2])
+    e = ExponentialEngine(kernel=kernel, gamma=gam, nu=NU, rule="product", formulation="velocity", lag=1,
+                          nsteps=500)
+    z0 = abs(float(K.Z(kernel, 0.0, NU)))
+    j0 = e._j0_u[np.searchsorted(e._ug, gam)]
+    worst_fit = 0.0
+    for n in range(1, 401):
+        got = e.start_weight(n)
+        exact = np.array([float(product_weights(kernel, g, np.int64(n), nu=NU, order=1, part="start0")) for g in gam])
+        direct = (n < j0) | (gam == 0)
+        assert np.allclose(got[direct], exact[direct], rtol=0, atol=1e-12 * z0)
+        if np.any(~direct):
+            worst_fit = max(worst_fit, float(np.abs(got[~direct] - exact[~direct]).max()))
+    assert e.start_weight(7)[0] == pytest.approx(-0.5 * float(K.Z(kernel, 0.0, NU)), abs=1e-12)
+    assert worst_fit <= 1e-4 * z0

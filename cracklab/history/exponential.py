@@ -335,6 +335,7 @@ class ExponentialEngine:
             self._e0c = 2.0 * c[None, :] * _start_factor(z)
             self._e0c[zero] = 0.0
             self._e0pow = None
+            self._e0_zero = None
         # weight() cache: powers rho^k for the last k asked
         self._wk = None
         self._wpow = None
@@ -503,8 +504,10 @@ class ExponentialEngine:
         direct = n < self._j0_u
         out[direct] = self._e0flat[self._wstart_u[direct] + n - self.lag]
         zero = ~direct & (ug == 0)
-        if np.any(zero):
-            out[zero] = float(_exact_weights(self.kernel, 0.0, n, part="start0", **self._exact))
+        if np.any(zero):  # gamma = 0: a constant kernel, E_0(n) is the same for every n >= 1
+            if self._e0_zero is None:
+                self._e0_zero = float(_exact_weights(self.kernel, 0.0, 1, part="start0", **self._exact))
+            out[zero] = self._e0_zero
         return out[self._inv].reshape(self.shape)
 
     def weight(self, j: int) -> np.ndarray:
