@@ -5,6 +5,14 @@ Geubelle & Rice (1995), J. Mech. Phys. Solids 43(11): modes I, II and III, 3D an
 
 __version__ = "0.1.0"
 
+import os as _os
+
+# The history engine's numba loop runs on OpenMP threads, the FFTs on FFTW's own: OpenMP
+# workers that spin after a parallel region (the GNU default) take the cores the FFTs
+# need, which made two threads slower than one (docs/performance.md).  Sleep instead,
+# unless the user chose otherwise; this must be set before the OpenMP runtime loads.
+_os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
 from . import analysis, energy, ensemble, kernels, scenes  # noqa: E402
 from .ensemble import open_ensemble  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
