@@ -380,3 +380,25 @@ def test_product_start_weight_against_the_exact_start_term(kernel):
             worst_fit = max(worst_fit, float(np.abs(got[~direct] - exact[~direct]).max()))
     assert e.start_weight(7)[0] == pytest.approx(-0.5 * float(K.Z(kernel, 0.0, NU)), abs=1e-12)
     assert worst_fit <= 1e-4 * z0
+
+
+def test_exact_taps_are_shared_between_engines_on_the_same_gammas():
+    """A second engine on the same gammas (an ensemble member on the same grid) takes its
+    exact direct taps from the process cache (history/tables.py) instead of evaluating the
+    kernel again, and pushes the same sums."""
+    from cracklab.history import tables
+
+    gam = np.linspace(0.0, 2.0, 37)
+    kw = dict(kernel="II", gamma=gam, nu=NU, rule="product", formulation="velocity", lag=1, nsteps=300)
+    tables.clear()
+    a = ExponentialEngine(**kw)
+    computed = tables.stats["computed"]
+    assert computed >= 2 and tables.stats["hits"] == 0          # lag taps and start terms
+    b = ExponentialEngine(**kw)
+    assert tables.stats["computed"] == computed and tables.stats["hits"] >= 2
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        x = rng.standard_normal(gam.size) + 1j * rng.standard_normal(gam.size)
+        assert np.array_equal(a.push(x), b.push(x))
+    ExponentialEngine(**{**kw, "kernel": "III"})
+    assert tables.stats["computed"] > computed                  # another kernel: computed anew

@@ -44,6 +44,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..weights import FORMULATIONS, RULES, convolution_weights
+from . import tables
 from .fit import DEFAULT_T0, get_fit
 
 __all__ = ["ExponentialEngine", "direct_taps"]
@@ -328,10 +329,14 @@ class ExponentialEngine:
             self._wstart_u[1:] = np.cumsum(jd_u)[:-1]
         uu = np.repeat(np.arange(ug.size), jd_u)
         jj = np.arange(uu.size) - self._wstart_u[uu]
-        self._wflat = np.asarray(_exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel()
+        # the exact taps, shared by every engine on the same gammas (history/tables.py)
+        key = ("exponential-taps", kernel, tables.digest(ug), tables.digest(jd_u), self.lag, float(nu), rule,
+               formulation)
+        self._wflat = tables.memoised(key + ("lag",), lambda: np.asarray(
+            _exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel())
         if rule == "product":  # start-up term E_0(n): exact for n < J0, fitted beyond
-            self._e0flat = np.asarray(_exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact),
-                                      dtype=float).ravel()
+            self._e0flat = tables.memoised(key + ("start0",), lambda: np.asarray(
+                _exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact), dtype=float).ravel())
             self._e0c = 2.0 * c[None, :] * _start_factor(z)
             self._e0c[zero] = 0.0
             self._e0pow = None

@@ -5,7 +5,8 @@ A weight table w_j(gamma) (rows j, columns the distinct gamma = q c_s dt of a gr
 a pure function of (kernel, the distinct gamma values, the j range, nu, rule,
 formulation). Every run on the same grid, material and time step asks for the same
 tables, so an ensemble worker computes them once and every later member on that grid
-reuses them (``DirectEngine._weights`` calls :func:`weight_table`). The cache is an
+reuses them (``DirectEngine._weights`` calls :func:`weight_table`; the exponential
+engine's exact direct taps go through :func:`memoised`). The cache is an
 LRU bounded by the total size of the tables it holds (``CRACKLAB_KERNEL_CACHE_MB``,
 default 256 MB; 0 turns caching off). Cached tables are read-only.
 
@@ -58,14 +59,9 @@ def _compute(kernel, gamma, j0, j1, nu, rule, formulation):
     return np.ascontiguousarray(np.broadcast_to(w, (j1 - j0, gamma.size)), dtype=float)
 
 
-def weight_table(kernel, gamma, j0: int, j1: int, *, nu, rule="trapezoid",
-                 formulation="displacement") -> np.ndarray:
-    """w_j(gamma) for j in [j0, j1) (rows) and each value of the 1-D array ``gamma``
-    (columns): ``convolution_weights`` for the rules of Eqs. (45)-(47), or the
-    product-integration lag weights for rule "product". Memoised (read-only result)."""
-    gamma = np.ascontiguousarray(gamma, dtype=float).ravel()
-    j0, j1 = int(j0), int(j1)
-    key = (str(kernel), digest(gamma), j0, j1, float(nu), str(rule), str(formulation))
+def memoised(key: tuple, compute):
+    """``compute()`` (an array), memoised under ``key`` in the same bounded LRU cache as
+    :func:`weight_table` (the result is read-only)."""
     limit = max_bytes()
     with _lock:
         hit = _cache.get(key)
@@ -73,7 +69,7 @@ def weight_table(kernel, gamma, j0: int, j1: int, *, nu, rule="trapezoid",
             _cache.move_to_end(key)
             stats["hits"] += 1
             return hit
-    w = _compute(kernel, gamma, j0, j1, nu, rule, formulation)
+    w = np.ascontiguousarray(compute())
     w.setflags(write=False)
     with _lock:
         stats["computed"] += 1
@@ -85,6 +81,17 @@ def weight_table(kernel, gamma, j0: int, j1: int, *, nu, rule="trapezoid",
                 stats["bytes"] -= old.nbytes
         stats["entries"] = len(_cache)
     return w
+
+
+def weight_table(kernel, gamma, j0: int, j1: int, *, nu, rule="trapezoid",
+                 formulation="displacement") -> np.ndarray:
+    """w_j(gamma) for j in [j0, j1) (rows) and each value of the 1-D array ``gamma``
+    (columns): ``convolution_weights`` for the rules of Eqs. (45)-(47), or the
+    product-integration lag weights for rule "product". Memoised (read-only result)."""
+    gamma = np.ascontiguousarray(gamma, dtype=float).ravel()
+    j0, j1 = int(j0), int(j1)
+    key = (str(kernel), digest(gamma), j0, j1, float(nu), str(rule), str(formulation))
+    return memoised(key, lambda: _compute(kernel, gamma, j0, j1, nu, rule, formulation))
 
 
 def clear() -> None:
