@@ -117,8 +117,8 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
     numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
-    if beta is None:  # the largest stable beta of the shear scheme, at most 0.25
-        beta = min(0.25, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3)))
+    if beta is None:  # at most 0.125: the rupture time converges with dt (docs/tpv3.md, "Time step")
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3)))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
