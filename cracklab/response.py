@@ -26,6 +26,7 @@ import numpy as np
 
 from .history import make_engine
 from .kernels import Z as Z_kernel
+from .loops import rotate
 from .spectral import Transforms
 
 
@@ -48,8 +49,7 @@ def split_channels(X: dict, channels, shear3d: bool, c, s) -> dict:
     if "I" in channels:
         out["I"] = X[2]
     if shear3d:
-        out["II"] = c * X[1] + s * X[3]
-        out["III"] = -s * X[1] + c * X[3]
+        out["II"], out["III"] = rotate(c, s, X[1], X[3])
     else:
         if "II" in channels:
             out["II"] = X[1]
@@ -147,8 +147,7 @@ class Response:
         if "I" in F:
             out[2] = F["I"]
         if self.shear3d:
-            out[1] = self.c * F["II"] - self.s * F["III"]
-            out[3] = self.s * F["II"] + self.c * F["III"]
+            out[1], out[3] = rotate(self.c, self.s, F["II"], F["III"], inverse=True)
         else:
             if "II" in F:
                 out[1] = F["II"]

@@ -1,0 +1,97 @@
+"""Compiled elementwise loops of the time step: one pass over the grid, no temporaries.
+
+Two operations run several times per step on every mode or node and, written as numpy
+expressions, cost more in temporaries than in arithmetic (docs/performance.md):
+
+* :func:`rotate`: the shear rotation of Eq. (28) between the components (1, 3) of a mode
+  and its channels (II, III), and back;
+* :func:`shear_velocity`: step (v) for the shear components, |v| = (|tau*| - S)^+ / eta
+  along tau*, and the traction tau = tau* - eta v.
+
+Each is a numba loop (compiled on first use, cached on disk); without numba the callers
+use the numpy expressions, which give the same numbers to the last bit (the same
+operations in the same order, no fast-math).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+_JIT = {}
+
+
+def _compiled(name):
+    """The numba version of loop ``name`` (None without numba)."""
+    if name not in _JIT:
+        try:
+            import numba
+        except Exception:  # pragma: no cover
+            _JIT[name] = None
+        else:
+            _JIT[name] = numba.njit(cache=True, nogil=True)(_PY[name])
+    return _JIT[name]
+
+
+def _rotate_loop(c, s, a, b, sign, o1, o2):
+    for i in range(c.size):
+        cc = c[i]
+        ss = sign * s[i]
+        x = a[i]
+        y = b[i]
+        o1[i] = cc * x + ss * y
+        o2[i] = cc * y - ss * x
+
+
+def _shear_loop(t1, t3, strength, scalar, eta, bonded, has_bonded, v1, v3, o1, o3):
+    for i in range(t1.size):
+        a = t1[i]
+        b = t3[i]
+        mag = np.sqrt(a * a + b * b)
+        excess = mag - (strength[0] if scalar else strength[i])
+        scale = excess / (eta * mag) if (excess > 0.0 and mag > 0.0) else 0.0
+        if has_bonded and bonded[i]:
+            scale = 0.0
+        v1[i] = scale * a
+        v3[i] = scale * b
+        o1[i] = a - eta * v1[i]
+        o3[i] = b - eta * v3[i]
+
+
+_PY = {"rotate": _rotate_loop, "shear": _shear_loop}
+
+
+def rotate(c, s, a, b, inverse=False):
+    """(c a + s b, -s a + c b), Eq. (28): components (1, 3) -> channels (II, III) of each
+    mode (c = k1/q, s = k3/q); ``inverse`` gives (c a - s b, s a + c b), channels ->
+    components. The compiled pass needs a, b, c, s of one shape; other shapes broadcast
+    in numpy."""
+    sign = -1.0 if inverse else 1.0
+    f = _compiled("rotate")
+    a, b = np.asarray(a), np.asarray(b)
+    if f is None or not (a.shape == b.shape == np.shape(c) == np.shape(s)) or a.dtype != b.dtype:
+        return c * a + sign * s * b, c * b - sign * s * a  # broadcasting (e.g. over time)
+    o1, o2 = np.empty_like(a), np.empty_like(a)
+    f(c.ravel(), s.ravel(), np.ascontiguousarray(a).ravel(), np.ascontiguousarray(b).ravel(), sign,
+      o1.ravel(), o2.ravel())
+    return o1, o2
+
+
+def compiled() -> bool:
+    """Whether the compiled loops are available (numba imports)."""
+    return _compiled("rotate") is not None
+
+
+def shear_velocity(tau1, tau3, strength, eta, bonded=None):
+    """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
+    tau = tau* - eta v; returns (v1, v3, tau1, tau3). ``strength`` is an array of the
+    grid's shape or a scalar. Needs numba (:func:`compiled`); without it
+    :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
+    S = np.asarray(strength, dtype=float)
+    f = _compiled("shear")
+    scalar = S.size == 1
+    S = S.reshape(1) if scalar else np.ascontiguousarray(np.broadcast_to(S, tau1.shape)).ravel()
+    has_bonded = bonded is not None
+    b = np.ascontiguousarray(np.broadcast_to(bonded, tau1.shape)).ravel() if has_bonded else np.zeros(1, bool)
+    out = [np.empty(tau1.shape) for _ in range(4)]
+    f(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(), S, scalar,
+      float(eta), b, has_bonded, *(o.ravel() for o in out))
+    return tuple(out)
