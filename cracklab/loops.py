@@ -6,7 +6,9 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
 * :func:`rotate`: the shear rotation of Eq. (28) between the components (1, 3) of a mode
   and its channels (II, III), and back;
 * :func:`shear_velocity`: step (v) for the shear components, |v| = (|tau*| - S)^+ / eta
-  along tau*, and the traction tau = tau* - eta v.
+  along tau*, and the traction tau = tau* - eta v;
+* :func:`product_predict`: the product scheme's predictor for one channel
+  (cracklab.response), D, H and F of every mode in one pass.
 
 Each is a numba loop (compiled on first use, cached on disk); without numba the callers
 use the numpy expressions, which give the same numbers to the last bit (the same
@@ -56,7 +58,16 @@ def _shear_loop(t1, t3, strength, scalar, eta, bonded, has_bonded, v1, v3, o1, o
         o3[i] = b - eta * v3[i]
 
 
-_PY = {"rotate": _rotate_loop, "shear": _shear_loop}
+def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
+    for i in range(V.size):
+        d = dknown[i] + dt * V[i]
+        dknown[i] = d
+        h = static[i] * d + pre[i] * (S[i] + e0[i] * v0[i])
+        H[i] = h
+        F[i] = h + K[i] * V[i]
+
+
+_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop}
 
 
 def rotate(c, s, a, b, inverse=False):
@@ -95,3 +106,18 @@ def shear_velocity(tau1, tau3, strength, eta, bonded=None):
     f(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(), S, scalar,
       float(eta), b, has_bonded, *(o.ravel() for o in out))
     return tuple(out)
+
+
+def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
+    """Product scheme, one channel, step n >= 2 (cracklab.response): ``dknown += dt V`` in
+    place, ``H = static dknown + pre (S + e0 v0)`` and ``F = H + K V``; returns (H, F)."""
+    f = _compiled("predict")
+    if f is None or not dknown.flags.c_contiguous:
+        dknown += dt * V
+        H = static * dknown + pre * (S + e0 * v0)
+        return H, H + K * V
+    H, F = np.empty_like(V), np.empty_like(V)
+    f(*(np.ascontiguousarray(a).ravel() for a in (V, S, e0, v0)), dknown.ravel(),
+      *(np.ascontiguousarray(np.broadcast_to(a, V.shape)).ravel() for a in (static, pre, K)), float(dt),
+      H.ravel(), F.ravel())
+    return H, F

@@ -26,7 +26,7 @@ import numpy as np
 
 from .history import make_engine
 from .kernels import Z as Z_kernel
-from .loops import rotate
+from .loops import product_predict, rotate
 from .spectral import Transforms
 
 
@@ -176,11 +176,12 @@ class Response:
             if n == 1:
                 ch.v0 = V[name].copy()
                 ch.dknown = 0.5 * self.dt * V[name]
-            else:
-                ch.dknown = ch.dknown + self.dt * V[name]
-            S = ch.engine.push(V[name]) + ch.engine.start_weight(n) * ch.v0
-            ch.H = ch.static * ch.dknown + ch.pre * S
-            F[name] = ch.H + ch.K * V[name]
+                S = ch.engine.push(V[name]) + ch.engine.start_weight(n) * ch.v0
+                ch.H = ch.static * ch.dknown + ch.pre * S
+                F[name] = ch.H + ch.K * V[name]
+            else:  # the same, in one pass: dknown += dt V, H, F
+                ch.H, F[name] = product_predict(V[name], ch.engine.push(V[name]), ch.engine.start_weight(n), ch.v0,
+                                                ch.dknown, ch.static, ch.pre, ch.K, self.dt)
         return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
 
     def correct(self, v_pred: dict) -> dict:
