@@ -449,9 +449,12 @@ def write_page(res, dxs, page, figrel, notes_path=None, command=None):
             d[f"x_rms_rate_{key}"] = f"{100 * c['series_rms']['rate']:.1f} %"
             d[f"x_rms_slip_{key}"] = f"{100 * c['series_rms']['slip']:.1f} %"
         d["x_wall_min"] = f"{res['cross_check']['runs']['100']['wall_s'] / 60:.0f}"
-    m = res["runs"][f"{dxa:g}"]
-    d["wall_min_100"] = f"{m['wall_s'] / 60:.0f}"
-    d["ms_step_100"] = f"{1e3 * m['s_per_step']:.0f}"
+    for x in dxs:
+        m = res["runs"][f"{x:g}"]
+        d[f"wall_min_{x:g}"] = f"{m['wall_s'] / 60:.0f}"
+        d[f"ms_step_{x:g}"] = f"{1e3 * m['s_per_step']:.0f}"
+        d[f"steps_{x:g}"] = f"{m['nsteps']}"
+        d[f"t_end_{x:g}"] = f"{m['t_end']:.1f}"
     fine = [x for x in dxs if x < dxa]
     if fine:
         lines = []
@@ -490,7 +493,8 @@ def write_page(res, dxs, page, figrel, notes_path=None, command=None):
 *Written by `{cmd}` from its own output ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}).
 This version: `{command or cmd}` (runs reused from `out/tpv3/`; the 100 m cross-check of the
 displacement scheme from `.venv/bin/python {cmd} --formulation displacement --dx 100`).
-`nice -n 10 .venv/bin/python {cmd}` alone runs what is missing (here the 50 m run, to 12 s) and redraws.*
+`nice -n 10 .venv/bin/python {cmd}` alone runs what is missing (both runs: about an hour on
+the shared 2-core machine) and redraws.*
 
 TPV3 (Harris et al. 2009; Day et al. 2005, Table 1) is the SCEC/USGS spontaneous rupture
 benchmark in a homogeneous whole space: a 30 km x 15 km vertical fault with linear
