@@ -28,6 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 import cracklab as cl  # noqa: E402
 from cracklab import energy, scenes  # noqa: E402
+from cracklab.history import resolve_engine  # noqa: E402
 
 FIG = ROOT / "docs" / "figures"
 DOC = ROOT / "docs" / "energy.md"
@@ -48,8 +49,9 @@ def build(name):
     elif name == "asperity":
         sc = scenes.asperity_row(n1=256, n3=128, t_end=3.0, numerics=fast)
     elif name == "tpv3":
-        # the product scheme (formulation "auto" with shear) runs on the direct engine
-        sc = scenes.tpv3(dx=300.0, t_end=12.0)
+        # tpv3's product scheme at beta = 0.25, the builder's default before the rupture-time
+        # comparison of docs/tpv3.md asked for 0.125: the budget is not a rupture-time measure
+        sc = scenes.tpv3(dx=300.0, t_end=12.0, beta=0.25)
     else:
         raise ValueError(name)
     return sc.replace(record=energy.energy_record(sc))
@@ -66,7 +68,8 @@ def run(name, out, force):
     t0 = time.time()
     cl.simulate(sc, store=str(store))
     info = {"seconds": time.time() - t0, "nsteps": sc.nsteps, "n1": sc.grid.n1, "n3": sc.grid.n3,
-            "dt": sc.dt, "formulation": sc.formulation, "engine": sc.numerics.engine}
+            "dt": sc.dt, "formulation": sc.formulation,
+            "engine": resolve_engine(sc.numerics.engine, sc.numerics.window)}
     done.write_text(json.dumps(info))
     return info
 
