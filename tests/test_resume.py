@@ -169,7 +169,10 @@ def _checkpoint_step(out):
         return None
 
 
-def _wait(proc, cond, timeout=120):
+def _wait(proc, cond, timeout=360):
+    """Poll ``cond`` until it holds (True), the process exits or ``timeout`` s pass (False).
+    Generous: a fresh process may first compile the numba loops (no disk cache yet), on a
+    machine shared with other jobs."""
     deadline = time.time() + timeout
     while time.time() < deadline:
         if cond():
