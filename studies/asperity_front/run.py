@@ -179,7 +179,7 @@ def analyse(out, figdir, info):
     }
     # plane diagnostics
     diag = {}
-    for case in runs.PLANE_CASES:
+    for case in {**runs.PLANE_CASES, **runs.ZONE_CASES}:
         ds = runs.open_run(out / f"{case}.zarr")
         tip = analysis.front_position(ds, method="opening")
         L = analysis.mean_crack_length(tip)
@@ -194,9 +194,15 @@ def analyse(out, figdir, info):
             G = float(theory.static_G_ratio(full, g0_ratio=GC_RATIO)) * (1.0 if const else full / (2 * l0))
             rows.append({"tip": x, "t": float(ds["t"][i]), "v": float(v.values[i]), "G_static": G,
                          "v_freund": float(theory.freund_speed(G, CR))})
+        from cracklab import scene_of as _scene
+        from cracklab.scenes import cohesive_zone_size
+
+        sc_case = _scene(ds)
         diag[case] = {"rows": rows, "elapsed_s": info.get(case, {}).get("elapsed_s"),
-                      "length": L, "speed": v}
-    res["plane"] = {k: {"rows": d["rows"], "elapsed_s": d["elapsed_s"]} for k, d in diag.items()}
+                      "length": L, "speed": v, "n1": sc_case.grid.n1, "beta": sc_case.beta,
+                      "zone": float(cohesive_zone_size(sc_case.material, float(np.max(sc_case.law.tau_c)),
+                                                              sc_case.law.delta_c))}
+    res["plane"] = {k: {kk: d[kk] for kk in ("rows", "elapsed_s", "n1", "beta", "zone")} for k, d in diag.items()}
     # where the ramped constant-K crack starts: G_static at that moment (load factor squared)
     from cracklab import scene_of as _so
 
@@ -356,6 +362,8 @@ def figures(data, diag, ev, frac, times6, res, figdir):
     styles = {"plane_sudden_constK": ("k", "-"), "plane_ramp_constK": ("C0", "-"),
               "plane_sudden_fixed": ("C1", "-"), "plane_ramp_fixed": ("C3", "-")}
     for case, d in diag.items():
+        if case not in styles:
+            continue
         c, ls = styles[case]
         L = d["length"].values
         vv = d["speed"].values
@@ -387,7 +395,7 @@ def main(argv=None):
     out.mkdir(parents=True, exist_ok=True)
     info = {}
     todo = [("asperity", runs.scene_3d(True)), ("uniform", runs.scene_3d(False))]
-    todo += [(k, runs.scene_plane(**v)) for k, v in runs.PLANE_CASES.items()]
+    todo += [(k, runs.scene_plane(**v)) for k, v in {**runs.PLANE_CASES, **runs.ZONE_CASES}.items()]
     # grid check: the same problem at half the resolution
     todo += [("asperity_256x128", runs.scene_3d(True, n1=256, n3=128, every=8)),
              ("uniform_256x128", runs.scene_3d(False, n1=256, n3=128, every=8))]

@@ -23,12 +23,14 @@ def scene_3d(asperities: bool, *, n1=512, n3=256, t_end=3.0, every=16):
                                numerics=NUMERICS, record=Record(fields=("delta_2",), every=every))
 
 
-def scene_plane(*, sudden=True, constant_K=True, n1=512, t_end=3.0, ramp_time=4.0, every=8):
+def scene_plane(*, sudden=True, constant_K=True, n1=512, t_end=3.0, ramp_time=4.0, every=8, cohesive_zone=0.1,
+                beta=0.5):
     """The uniform problem in the plane (exactly the x3-invariant 3D one): the paper's
     sudden constant-K load, or a slow smooth ramp (``sudden=False``), or a fixed load
-    (``constant_K=False``, tau0 kept at its initial value)."""
-    sc = scenes.asperity_row(n1=n1, n3=1, beta=0.5, t_end=t_end, asperities=False, numerics=NUMERICS,
-                             record=Record(fields=("delta_2",), every=every))
+    (``constant_K=False``, tau0 kept at its initial value); ``cohesive_zone`` (in Z) and
+    ``beta`` as in ``scenes.asperity_row``."""
+    sc = scenes.asperity_row(n1=n1, n3=1, beta=beta, t_end=t_end, asperities=False, numerics=NUMERICS,
+                             cohesive_zone=cohesive_zone, record=Record(fields=("delta_2",), every=every))
     load = dataclasses.replace(sc.loading, constant_K=constant_K)
     if not sudden:
         load = dataclasses.replace(load, time="smooth", ramp_time=ramp_time)
@@ -40,6 +42,15 @@ PLANE_CASES = {
     "plane_ramp_constK": dict(sudden=False, constant_K=True, t_end=7.0),
     "plane_sudden_fixed": dict(sudden=True, constant_K=False, t_end=3.0),
     "plane_ramp_fixed": dict(sudden=False, constant_K=False, t_end=6.0),
+}
+# the ramped constant-K case with a smaller cohesive zone (the same number of cells in
+# it) and with a smaller time step: is the excess over Freund's speed physical or numerical?
+ZONE_CASES = {
+    "plane_ramp_constK_zone0.05": dict(sudden=False, constant_K=True, t_end=7.0, cohesive_zone=0.05, n1=1024,
+                                       every=16),
+    "plane_ramp_constK_zone0.025": dict(sudden=False, constant_K=True, t_end=7.0, cohesive_zone=0.025, n1=2048,
+                                        every=32),
+    "plane_ramp_constK_beta0.125": dict(sudden=False, constant_K=True, t_end=7.0, beta=0.125),
 }
 
 
