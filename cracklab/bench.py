@@ -19,13 +19,14 @@ from .stepper import steps
 MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
 
 
-def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1):
+def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None):
     """A traction-free plane under a random load on the components of ``mode``."""
     grid = Grid(n1=n1, n3=n3, L1=1.0, L3=n3 / n1 if n3 > 1 else 1.0)
     rng = np.random.default_rng(0)
     load = {f"tau0_{c}": rng.standard_normal(grid.shape) for c in MODES[mode]}
     comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
-    numerics = Numerics(engine=engine, fft_threads=int(threads))
+    numerics = Numerics(engine=engine, fft_threads=int(threads),
+                        engine_threads=None if engine_threads is None else int(engine_threads))
     beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps)
     dt = beta * grid.dx_min
     return Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=grid, law=TractionFree(),
@@ -44,8 +45,8 @@ def fft_pair_ms(grid, repeats=50, threads=1):
     return 1e3 * float(np.median(times))
 
 
-def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1):
-    scene = bench_scene(n1, n3, mode, nsteps, engine, threads)
+def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None):
+    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
     durations = []
     it = steps(scene)
     if progress:
@@ -64,7 +65,8 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1):
         "n1": n1, "n3": n3, "mode": mode, "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (n1 * n3),
-        "threads": int(threads), "fft_pair_ms": fft_pair_ms(grid, threads=threads),
+        "threads": int(threads), "engine_threads": scene.numerics.history_threads,
+        "fft_pair_ms": fft_pair_ms(grid, threads=threads),
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     }

@@ -217,15 +217,17 @@ def export(store, netcdf, member) -> None:
 @click.option("--threads", type=int, default=1, show_default=True,
               help="Threads for the FFTs and the history engine (more than one helps only on an "
                    "otherwise idle machine).")
+@click.option("--engine-threads", type=int, default=None,
+              help="Threads for the history engine only (default: --threads).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from .errors import InputError
 
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
-                           threads=threads)
+                           threads=threads, engine_threads=engine_threads)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:

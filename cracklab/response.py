@@ -74,7 +74,7 @@ class Response:
     """Maps the displacement (and velocity) history on the plane to f_j, Eq. (3)."""
 
     def __init__(self, material, grid, dt, components, *, formulation="displacement",
-                 rule="trapezoid", engine="direct", window=None, transforms=None, nsteps=None):
+                 rule="trapezoid", engine="direct", window=None, transforms=None, nsteps=None, threads=None):
         self.components = tuple(sorted(components))
         self.formulation = formulation
         self.fft = transforms or Transforms(grid)
@@ -95,7 +95,7 @@ class Response:
         def channel(kernel):
             eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule,
                               formulation="displacement" if formulation == "displacement" else "velocity",
-                              lag=lag, window=window, threads=self.fft.workers, nsteps=nsteps)
+                              lag=lag, window=window, threads=threads or self.fft.workers, nsteps=nsteps)
             if formulation == "displacement":
                 return _Channel(kernel, eng, -0.5 * mu * q * gamma)
             z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
@@ -116,7 +116,7 @@ class Response:
         """The response a run of ``scene`` uses (its scheme, engine, window and length)."""
         return cls(scene.material, scene.grid, scene.dt, scene.components, formulation=scene.formulation,
                    engine=scene.numerics.engine, window=scene.numerics.window, transforms=transforms,
-                   nsteps=scene.nsteps)
+                   nsteps=scene.nsteps, threads=scene.numerics.history_threads)
 
     # -- state (checkpoints) -----------------------------------------------------------
     def get_state(self) -> dict:

@@ -39,13 +39,16 @@ class Numerics:
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
     T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
-    its velocity magnitude first exceeds it."""
+    its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
+    the exponential engine's loop unless ``engine_threads`` is given (the two scale
+    differently: docs/performance.md)."""
 
     formulation: str = "auto"
     engine: str = "auto"
     window: float | None = None
     rupture_threshold: float = 0.0
     fft_threads: int = 1
+    engine_threads: int | None = None
 
     def __post_init__(self):
         from .history import ENGINES
@@ -67,6 +70,16 @@ class Numerics:
                 or not 1 <= self.fft_threads <= MAX_FFT_THREADS:
             raise InputError("numerics.fft_threads", f"must be an integer >= 1 (and <= {MAX_FFT_THREADS}), "
                                                      f"got {self.fft_threads!r}")
+        if self.engine_threads is not None and (
+                isinstance(self.engine_threads, bool) or not isinstance(self.engine_threads, (int, np.integer))
+                or not 1 <= self.engine_threads <= MAX_FFT_THREADS):
+            raise InputError("numerics.engine_threads", f"must be None (as fft_threads) or an integer >= 1 "
+                                                        f"(and <= {MAX_FFT_THREADS}), got {self.engine_threads!r}")
+
+    @property
+    def history_threads(self) -> int:
+        """Threads of the history engine's loop: ``engine_threads``, or ``fft_threads`` when None."""
+        return int(self.fft_threads if self.engine_threads is None else self.engine_threads)
 
     def scheme(self, components) -> tuple[str, str]:
         """(formulation, convolution rule) used for a scene with these active components."""

@@ -246,6 +246,7 @@ RANGES = {
     ("numerics", "window"): (_finite_bad(0.0), "> 0"),
     ("numerics", "rupture_threshold"): (_finite_bad(-1e-300), ">= 0"),
     ("numerics", "fft_threads"): (st.one_of(st.integers(max_value=0), st.integers(min_value=1025)), ">= 1"),
+    ("numerics", "engine_threads"): (st.one_of(st.integers(max_value=0), st.integers(min_value=1025)), ">= 1"),
     ("numerics", "formulation"): (st.text(max_size=10).filter(
         lambda s: s not in ("auto", "displacement", "velocity", "product")), "must be one of"),
     ("loading", "time"): (st.text(max_size=10).filter(lambda s: s not in ("step", "ramp", "smooth")),

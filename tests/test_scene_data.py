@@ -288,6 +288,8 @@ def test_python_constructors_close_the_same_gaps():
         Numerics(engine="magic")
     with pytest.raises(InputError, match="numerics.fft_threads"):
         Numerics(fft_threads=1.5)
+    with pytest.raises(InputError, match="numerics.engine_threads: must be None"):
+        Numerics(engine_threads=0)
     with pytest.raises(InputError, match="record.stations.a"):
         Record(stations={"a": 0.5})
     with pytest.raises(InputError, match="record.region.x1"):
@@ -329,3 +331,24 @@ def test_docs_scenes_examples_run(tmp_path, monkeypatch):
     namespace = {"__name__": "__docs__"}
     for body in code:
         exec(compile(body, "docs/scenes.md", "exec"), namespace)
+
+
+def test_engine_threads_reach_the_engine_and_round_trip():
+    """numerics.engine_threads sets the history engine's threads apart from the FFTs'
+    (None: as fft_threads), survives the TOML round trip, and does not change the result."""
+    import cracklab
+    from cracklab.io import scene_from_toml, scene_to_toml
+    from cracklab.response import Response
+
+    base = SCENES["traction-free"]()
+    sc = base.replace(numerics=Numerics(engine="exponential", fft_threads=1, engine_threads=2))
+    assert sc.numerics.history_threads == 2 and base.numerics.history_threads == base.numerics.fft_threads
+    back = scene_from_toml(scene_to_toml(sc))
+    assert back.numerics.engine_threads == 2 and back.numerics.fft_threads == 1
+    assert scene_from_toml(scene_to_toml(base)).numerics.engine_threads is None
+    resp = Response.for_scene(sc)
+    assert {ch.engine.threads for ch in resp.channels.values()} == {2} and resp.fft.workers == 1
+    short = dict(t_end=5 * sc.dt)
+    a = cracklab.simulate(sc.replace(**short))
+    b = cracklab.simulate(base.replace(numerics=Numerics(engine="exponential"), **short))
+    assert np.array_equal(a["delta_2"].values, b["delta_2"].values)

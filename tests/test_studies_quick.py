@@ -178,17 +178,18 @@ def test_truncated_engine_differs_and_exponential_agrees(monkeypatch):
 
 def test_performance_study_quick_writes_one_table_per_thread_count(tmp_path):
     """studies/performance/run.py --quick: one `cracklab bench --json` per row and thread
-    count; bench.json holds every row with its thread count and the fields the page quotes
+    setting (1 thread; 2 engine threads with 1 FFT thread); bench.json holds every row
+    with its thread counts and the fields the page quotes
     (no timing is asserted: speed is a benchmark, not a test)."""
     perf = _load("performance_study", ROOT / "studies" / "performance" / "run.py")
-    perf.main(["--quick", "--threads", "1", "2", "--out", str(tmp_path)])
+    perf.main(["--quick", "--threads", "1", "2/1", "--out", str(tmp_path)])
     import json
 
     rows = json.loads((tmp_path / "bench.json").read_text())
-    assert [(r["n1"], r["steps"], r["threads"]) for r in rows] == [(128, 101, 1), (128, 401, 1), (128, 101, 2),
-                                                                   (128, 401, 2)]
+    assert [(r["n1"], r["steps"], r["engine_threads"], r["threads"]) for r in rows] == [
+        (128, 101, 1, 1), (128, 401, 1, 1), (128, 101, 2, 1), (128, 401, 2, 1)]
     for r in rows:
         assert r["ms_per_step"] > 0 and r["fft_pair_ms"] > 0 and r["peak_rss_mb"] > 0
         assert r["us_per_point_per_step"] == pytest.approx(1e3 * r["ms_per_step"] / (128 * 128))
     md = (tmp_path / "bench.md").read_text()
-    assert md.count("| 128 x 128 | I |") == 4 and "1 thread:" in md and "2 threads:" in md
+    assert md.count("| 128 x 128 | I |") == 4 and "1 thread:" in md and "2 engine threads, 1 FFT thread:" in md

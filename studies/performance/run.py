@@ -27,9 +27,11 @@ QUICK = [(128, 128, "I", 100, "exponential"), (128, 128, "I", 400, "exponential"
 TARGETS = {(256, 256, "I"): 2.0, (512, 512, "I"): 8.0, (512, 512, "shear"): 16.0}
 
 
-def bench(n1, n3, mode, steps, engine, threads):
+def bench(n1, n3, mode, steps, engine, threads, engine_threads=None):
     cmd = [sys.executable, "-m", "cracklab.cli", "bench", "--n1", str(n1), "--n3", str(n3), "--mode", mode,
            "--steps", str(steps), "--engine", engine, "--threads", str(threads), "--json"]
+    if engine_threads is not None:
+        cmd[-1:-1] = ["--engine-threads", str(engine_threads)]
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     res = json.loads(out.strip().splitlines()[-1])
     res["command"] = "cracklab bench " + " ".join(cmd[4:])
@@ -52,23 +54,32 @@ def table(results) -> str:
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two small rows only")
-    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2],
-                    help="thread counts to measure, each over every row (default 1 2)")
+    ap.add_argument("--threads", nargs="+", default=["1", "2", "2/1"],
+                    help="thread settings to measure, each over every row: N (FFTs and engine) or E/F "
+                         "(E engine threads, F FFT threads); default 1 2 2/1")
     ap.add_argument("--out", default="out/performance")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = []
-    for threads in args.threads:
+    configs = []
+    for spec in args.threads:
+        e, _, f = str(spec).partition("/")
+        configs.append((int(e), int(f or e)))
+    for eng_t, fft_t in configs:
         for row in (QUICK if args.quick else ROWS):
-            if threads > 1 and row[4] == "direct":
+            if (eng_t, fft_t) != (1, 1) and row[4] == "direct":
                 continue  # the direct engine's reference row, one thread only
-            print("cracklab bench", row, f"threads={threads}", flush=True)
-            results.append(bench(*row, threads=threads))
+            print("cracklab bench", row, f"engine threads={eng_t}, FFT threads={fft_t}", flush=True)
+            results.append(bench(*row, threads=fft_t, engine_threads=eng_t))
             print(f"  {results[-1]['ms_per_step']:.2f} ms/step", flush=True)
     (out / "bench.json").write_text(json.dumps(results, indent=1))
-    md = "\n\n".join(f"{t} thread{'s' if t > 1 else ''}:\n\n" + table([r for r in results if r["threads"] == t])
-                      for t in args.threads)
+
+    def title(e, f):
+        return f"{e} thread{'s' if e > 1 else ''}" if e == f else f"{e} engine threads, {f} FFT thread{'s' if f > 1 else ''}"
+
+    md = "\n\n".join(title(e, f) + ":\n\n" + table([r for r in results if (r["engine_threads"], r["threads"]) == (e, f)])
+                      for e, f in configs)
     (out / "bench.md").write_text(md + "\n")
     print(md)
 
