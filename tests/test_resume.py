@@ -17,6 +17,7 @@ import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree
 from cracklab import checkpoint as ck
 from cracklab.io import scene_to_toml
+from interrupt import interrupted_run
 
 SIM = importlib.import_module("cracklab.simulate")
 ROOT = Path(__file__).resolve().parent.parent
@@ -93,19 +94,8 @@ def test_interrupted_run_resumes_bit_for_bit(case, tmp_path, monkeypatch):
     scene = CASES[case]()
     assert scene.nsteps > 40
     ref = cracklab.simulate(scene)
-    store = tmp_path / "run.zarr"
-    real = SIM._Recorder.__call__
     stop = scene.nsteps // 2 + 1
-
-    def interrupted(self, state):
-        real(self, state)
-        if state.n == stop:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(SIM._Recorder, "__call__", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        cracklab.simulate(scene, store=store, checkpoint_every=9)
-    monkeypatch.setattr(SIM._Recorder, "__call__", real)
+    store = interrupted_run(scene, tmp_path / "run.zarr", monkeypatch, stop=stop, checkpoint_every=9)
     killed = xr.open_zarr(store, consolidated=False)      # readable as it was left
     assert killed.attrs["cracklab_status"] == "running"
     assert killed.attrs["cracklab_checkpoint_step"] == (stop // 9) * 9

@@ -19,6 +19,7 @@ from cracklab import checkpoint as ck
 from cracklab.cli import main
 from cracklab.errors import StoreError
 from cracklab.io import scene_to_toml
+from interrupt import interrupted_run
 
 SIM = importlib.import_module("cracklab.simulate")
 
@@ -39,19 +40,7 @@ def _cli_error(args):
 
 def _interrupted(tmp_path, scene, monkeypatch, stop=30):
     """A store left as by a kill after step ``stop`` (checkpoints every 10 steps)."""
-    store = tmp_path / "run.zarr"
-    real = SIM._Recorder.__call__
-
-    def interrupted(self, state):
-        real(self, state)
-        if state.n == stop:
-            raise KeyboardInterrupt
-
-    monkeypatch.setattr(SIM._Recorder, "__call__", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        cracklab.simulate(scene, store=store, checkpoint_every=10)
-    monkeypatch.setattr(SIM._Recorder, "__call__", real)
-    return store
+    return interrupted_run(scene, tmp_path / "run.zarr", monkeypatch, stop=stop, checkpoint_every=10)
 
 
 # ---------------------------------------------------------------------------- not a store
