@@ -266,13 +266,10 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
             v2 = np.maximum(v2, -delta[2] / dt)
         v[2] = v2
     shear = [c for c in SHEAR if c in tau_star]
+    done = {}  # components whose v (bonded points included) and tau are final
     if len(shear) == 2 and loops.compiled():  # one compiled pass, the same numbers as below
-        v[1], v[3], t1, t3 = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded)
-        if 2 not in v:
-            return v, {1: t1, 3: t3}
-        if law.bonded is not None:
-            v[2] = np.where(law.bonded, 0.0, v[2])
-        return v, {2: tau_star[2] - eta[2] * v[2], 1: t1, 3: t3}
+        v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded)
+        shear = []
     if shear:
         mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))
         excess = np.maximum(mag - strength, 0.0)
@@ -282,6 +279,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
             v[c] = scale * tau_star[c]
     if law.bonded is not None:
         for c in v:
-            v[c] = np.where(law.bonded, 0.0, v[c])
-    tau = {c: tau_star[c] - eta[c] * v[c] for c in v}
+            if c not in done:
+                v[c] = np.where(law.bonded, 0.0, v[c])
+    tau = {c: done[c] if c in done else tau_star[c] - eta[c] * v[c] for c in v}
     return v, tau

@@ -28,6 +28,12 @@ def resolve_formulation(formulation: str, components) -> str:
     return "product" if any(c in (1, 3) for c in components) else "displacement"
 
 
+def _check_threads(name, value, alternative=""):
+    """A thread count: an integer in [1, MAX_FFT_THREADS]."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= MAX_FFT_THREADS:
+        raise InputError(name, f"must be {alternative}an integer >= 1 (and <= {MAX_FFT_THREADS}), got {value!r}")
+
+
 @dataclass(frozen=True)
 class Numerics:
     """Scheme options: ``formulation`` "displacement" (Eq. 32, trapezoid pre-integrated
@@ -66,15 +72,9 @@ class Numerics:
                 raise InputError("numerics.window", f"a truncated history needs engine 'direct' "
                                                     f"(engine {self.engine!r} keeps the whole history)")
         check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
-        if isinstance(self.fft_threads, bool) or not isinstance(self.fft_threads, (int, np.integer)) \
-                or not 1 <= self.fft_threads <= MAX_FFT_THREADS:
-            raise InputError("numerics.fft_threads", f"must be an integer >= 1 (and <= {MAX_FFT_THREADS}), "
-                                                     f"got {self.fft_threads!r}")
-        if self.engine_threads is not None and (
-                isinstance(self.engine_threads, bool) or not isinstance(self.engine_threads, (int, np.integer))
-                or not 1 <= self.engine_threads <= MAX_FFT_THREADS):
-            raise InputError("numerics.engine_threads", f"must be None (as fft_threads) or an integer >= 1 "
-                                                        f"(and <= {MAX_FFT_THREADS}), got {self.engine_threads!r}")
+        _check_threads("numerics.fft_threads", self.fft_threads)
+        if self.engine_threads is not None:
+            _check_threads("numerics.engine_threads", self.engine_threads, "None (as fft_threads) or ")
 
     @property
     def history_threads(self) -> int:
