@@ -20,12 +20,12 @@ rounded up to a small set of levels, and >= lag + 1):
   carried by one complex state per term and per real input (Re x and Im x):
   ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = Re sum_p e_p s_p``.
 
-Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the per-step recursion in one
-parallel pass over the modes, the states split into real and imaginary arrays with the
-terms innermost (the term loop vectorises); "numpy" runs the same recursion vectorised
-over the modes.  A variant that advanced the states 8 steps at a time (states read once
-per block) measured 10-15 % slower and was dropped (docs/fast_engine.md).
-Both give the same sums to round-off.  The product
+Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the compiled loops of
+:mod:`cracklab.history.blocked`: every mode keeps at least 8 direct taps, so the states
+of a mode can be advanced 8 steps at a time from inputs already in its ring (one eighth
+of the modes per step, staggered), their tail sums kept for the next 8 steps; "numpy"
+runs the per-step recursion vectorised over the modes.  Both give the same sums to
+round-off (docs/fast_engine.md).  The product
 rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
 
 Memory per mode is fixed at construction (about 2 P complex states, Jd + 8 buffered values,
@@ -55,25 +55,29 @@ _LEVELS = np.array(sorted({1, 2, 3, 4, 5, 6, 7, 8} | {int(round(2 ** (k / 4))) f
 _RESYNC = 512
 #: start of the fitted representation used by the engine (exact taps for T < ENGINE_T0)
 ENGINE_T0 = 4.0
+#: steps the compiled loop advances the states at once, and taps it keeps at least (blocked.py)
+_BLOCK = 8
+#: rings of up to this many taps get a row of weights per ring position (blocked.taps)
+_ROTATED_MAX = 16
 _SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact", "product")  # recompute the powers of weight() exactly every so many calls
 
 
-def direct_taps(gamma, lag=0, T0=DEFAULT_T0, extra=0):
-    """Number of direct taps Jd (>= 1) for each gamma: the exact weights w_lag .. w_{lag+Jd-1}.
+def direct_taps(gamma, lag=0, T0=DEFAULT_T0, extra=0, minimum=1):
+    """Number of direct taps Jd (>= ``minimum``) for each gamma: the exact weights w_lag .. w_{lag+Jd-1}.
 
     J0 = Jd + lag is ceil(T0 / gamma) + extra (at least lag + 1), with Jd rounded up to one
-    of a few levels (``_LEVELS``); gamma = 0 gives Jd = 1.  ``extra`` = 1 for the product
-    rule, whose weight w_k integrates the kernel from (k - 1) gamma.
+    of a few levels (``_LEVELS``); gamma = 0 gives Jd = ``minimum``.  ``extra`` = 1 for the
+    product rule, whose weight w_k integrates the kernel from (k - 1) gamma.
     """
     g = np.asarray(gamma, dtype=float)
     pos = g > 0
     with np.errstate(divide="ignore"):
         j0 = np.where(pos, np.ceil(T0 / np.where(pos, g, 1.0) * (1 - 1e-12)) + extra, 1.0)
-    jd = np.maximum(j0, lag + 1) - lag
+    jd = np.maximum(np.maximum(j0, lag + 1) - lag, minimum)
     i = np.searchsorted(_LEVELS, jd)
     big = i >= _LEVELS.size
     out = np.where(big, jd, _LEVELS[np.minimum(i, _LEVELS.size - 1)])
-    return np.where(pos, out, 1).astype(np.int64)
+    return np.where(pos, out, minimum).astype(np.int64)
 
 
 def _expm1_over(z):
@@ -127,75 +131,6 @@ def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
     return convolution_weights(kernel, g, k, nu=nu, rule=rule, formulation=formulation)
 
 
-# ----------------------------------------------------------------------------- numba kernel
-_CHUNKS = 64
-
-
-def _numba_step():
-    """The per-step recursion in one parallel numba pass (None if numba is unavailable)."""
-    try:
-        import numba
-    except Exception:  # pragma: no cover
-        return None
-
-    @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-    def step(x, n, order, us, start, jd_u, wstart_u, w, buf, rr_u, ri_u, er_u, ei_u, sr, si, out):
-        """s_p <- rho_p s_p + x_{n-Jd} and S_n = taps + Re sum_p e_p s_p, every mode, every step.
-
-        The states are split into real and imaginary arrays with the terms innermost, so
-        that the term loop vectorises (fastmath lets the two sums be reordered).
-        """
-        m_all = order.size
-        ph = rr_u.shape[1]
-        for c in numba.prange(_CHUNKS):
-            for i in range(c * m_all // _CHUNKS, (c + 1) * m_all // _CHUNKS):
-                m = order[i]
-                u = us[i]
-                J = jd_u[u]
-                b0 = start[i]
-                w0 = wstart_u[u]
-                p = n % J
-                old = buf[b0 + p]
-                buf[b0 + p] = x[m]
-                accr = 0.0
-                acci = 0.0
-                k = p
-                for j in range(J):  # direct taps: w_{lag+j} x_{n-j}
-                    v = buf[b0 + k]
-                    wj = w[w0 + j]
-                    accr += wj * v.real
-                    acci += wj * v.imag
-                    k -= 1
-                    if k < 0:
-                        k += J
-                xr = old.real  # x_{n-Jd} enters the recursive states
-                xi = old.imag
-                a_r = sr[i, 0]
-                a_i = si[i, 0]
-                b_r = sr[i, 1]
-                b_i = si[i, 1]
-                rr = rr_u[u]
-                ri = ri_u[u]
-                er = er_u[u]
-                ei = ei_u[u]
-                sa = 0.0
-                sb = 0.0
-                for q in range(ph):
-                    t0 = a_r[q] * rr[q] - a_i[q] * ri[q] + xr
-                    t1 = a_r[q] * ri[q] + a_i[q] * rr[q]
-                    t2 = b_r[q] * rr[q] - b_i[q] * ri[q] + xi
-                    t3 = b_r[q] * ri[q] + b_i[q] * rr[q]
-                    a_r[q] = t0
-                    a_i[q] = t1
-                    b_r[q] = t2
-                    b_i[q] = t3
-                    sa += er[q] * t0 - ei[q] * t1
-                    sb += er[q] * t2 - ei[q] * t3
-                out[m] = complex(accr + sa, acci + sb)
-
-    return step
-
-
 def _power_sum_numpy(pw, rho, coef, factor, out):
     pw *= rho
     out[:] = factor * np.einsum("up,up->u", coef, pw).real
@@ -237,15 +172,19 @@ def _set_threads(threads):
     numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
 
 
-_STEP = None
+_BLOCKED = None
 
 
-def _get_step():
-    """The compiled per-step loop (None if numba is unavailable)."""
-    global _STEP
-    if _STEP is None:
-        _STEP = _numba_step() or False
-    return _STEP or None
+def _blocked():
+    """The compiled kernels (:mod:`cracklab.history.blocked`), or None if numba is unavailable."""
+    global _BLOCKED
+    if _BLOCKED is None:
+        try:
+            from . import blocked
+        except Exception:  # pragma: no cover - no numba
+            blocked = False
+        _BLOCKED = blocked
+    return _BLOCKED or None
 
 
 def _backend_choice():
@@ -253,7 +192,7 @@ def _backend_choice():
     env = os.environ.get("CRACKLAB_EXP_BACKEND", "").strip().lower()
     if env in ("numpy", "numba"):
         return env
-    return "numba" if _get_step() is not None else "numpy"
+    return "numba" if _blocked() is not None else "numpy"
 
 
 # ----------------------------------------------------------------------------- engine
@@ -303,7 +242,8 @@ class ExponentialEngine:
         ug, inv = np.unique(self.gamma, return_inverse=True)
         self._ug, self._inv = ug, inv
         self._shift = shift = _SHIFT.get(rule, 0)
-        jd_u = direct_taps(ug, self.lag, self.T0, extra=shift)
+        # at least BLOCK taps: the compiled loop advances the states BLOCK steps ahead (blocked.py)
+        jd_u = direct_taps(ug, self.lag, self.T0, extra=shift, minimum=_BLOCK)
         self._jd_u = jd_u
         self._j0_u = jd_u + self.lag  # first fitted weight index
         lam, c = self.fit.lam, self.fit.coef
@@ -349,20 +289,7 @@ class ExponentialEngine:
 
         m = self.gamma.size
         if self.backend == "numba":
-            self._push_nb = _get_step()
-            order = np.argsort(inv, kind="stable")
-            us = inv[order].astype(np.int64)
-            self._order, self._us = order.astype(np.int64), us
-            self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
-            jd_sorted = jd_u[us]
-            self._start = np.zeros(m, dtype=np.int64)
-            if m:
-                self._start[1:] = np.cumsum(jd_sorted)[:-1]
-            self._buf = np.zeros(int(jd_sorted.sum()), dtype=complex)
-            self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
-            self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
-            self._sr = np.zeros((m, 2, self.pairs))
-            self._si = np.zeros((m, 2, self.pairs))
+            self._setup_blocked(rho_u, e_u)
         else:
             # permute the modes so that each level of Jd is a contiguous block
             jd = jd_u[inv]
@@ -393,13 +320,45 @@ class ExponentialEngine:
             self._xp = np.zeros(m, dtype=complex)
             self._S = np.zeros(m, dtype=complex)
 
+    def _setup_blocked(self, rho_u, e_u):
+        """Tables and states of the compiled loop (blocked.py): modes sorted by gamma."""
+        m, jd_u = self.gamma.size, self._jd_u
+        order = np.argsort(self._inv, kind="stable")
+        us = self._inv[order].astype(np.int64)
+        self._order, self._us = order.astype(np.int64), us
+        self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
+        self._pos = np.zeros(jd_u.size, dtype=np.int64)
+        self._start = np.zeros(m, dtype=np.int64)  # ring of mode i: Jd real parts, then Jd imaginary parts
+        if m:
+            self._start[1:] = np.cumsum(2 * jd_u[us])[:-1]
+        self._bounds = [m * g // _BLOCK for g in range(_BLOCK + 1)]
+        # tap weights: a row per ring position for short rings, w_j for long ones (blocked.taps)
+        rows = np.where(jd_u <= _ROTATED_MAX, jd_u * jd_u, jd_u)
+        self._wrow = np.zeros(jd_u.size, dtype=np.int64)
+        if jd_u.size:
+            self._wrow[1:] = np.cumsum(rows)[:-1]
+        wtab = np.empty(int(rows.sum()))
+        for J in np.unique(jd_u):
+            sel = np.flatnonzero(jd_u == J)
+            w = self._wflat[self._wstart_u[sel][:, None] + np.arange(J)[None, :]]  # (n_u, J): w_j
+            if J <= _ROTATED_MAX:
+                p, r = np.meshgrid(np.arange(J), np.arange(J), indexing="ij")
+                w = w[:, (p - r) % J].reshape(sel.size, J * J)  # slot r holds x_{n - (p - r) mod J}
+            wtab[self._wrow[sel][:, None] + np.arange(w.shape[1])[None, :]] = w
+        self._wtab = wtab
+        self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
+        self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
+        self._ring = np.zeros(int(2 * jd_u[us].sum()))
+        self._states = [np.zeros((m, self.pairs)) for _ in range(4)]  # Re and Im of s_p for Re x, then Im x
+        self._F = np.zeros((_BLOCK, m), dtype=complex)  # tail sums of the next BLOCK steps
+
     # ------------------------------------------------------------------ public
     @property
     def nbytes(self) -> int:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
-            arrs = [self._buf, self._wflat, self._rr, self._ri, self._er, self._ei, self._sr, self._si,
-                    self._order, self._us, self._start]
+            arrs = [self._ring, self._wflat, self._wtab, self._rr, self._ri, self._er, self._ei, self._F,
+                    self._order, self._us, self._start, self._pos, *self._states]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -409,18 +368,24 @@ class ExponentialEngine:
     def state_shapes(self) -> list:
         """Shapes of every state array (for checking that nothing grows with n)."""
         if self.backend == "numba":
-            arrs = [self._buf, self._rr, self._er, self._sr, self._si]
+            arrs = [self._ring, self._rr, self._er, self._F, *self._states]
         else:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
         return [a.shape for a in arrs]
 
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
-            return {"buf": self._buf, "sr": self._sr, "si": self._si}
+            out = {"ring": self._ring, "F": self._F}
+            out.update({f"s{k}": a for k, a in enumerate(self._states)})
+            return out
         out = {"sig": self._sig}
         for i, g in enumerate(self._groups):
             out[f"buf{i}"] = g[3]
         return out
+
+    @property
+    def _layout(self) -> str:
+        return "numba-blocked" if self.backend == "numba" else self.backend
 
     _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n")
 
@@ -429,7 +394,7 @@ class ExponentialEngine:
         weight() and start_weight() advance from call to call), copied."""
         out = {k: a.copy() for k, a in self._state_arrays().items()}
         out["n"] = self.n
-        out["layout"] = self.backend
+        out["layout"] = self._layout
         for k in self._CACHES:
             v = getattr(self, k, None)
             out["cache" + k] = v.copy() if isinstance(v, np.ndarray) else v
@@ -437,9 +402,9 @@ class ExponentialEngine:
 
     def set_state(self, state: dict) -> None:
         """Restore a state from :meth:`get_state` (same constructor arguments and backend)."""
-        if state.get("layout") != self.backend:
-            raise ValueError(f"engine state was saved with backend {state.get('layout')!r}, "
-                             f"this engine uses {self.backend!r}")
+        if state.get("layout") != self._layout:
+            raise ValueError(f"engine state was saved with layout {state.get('layout')!r}, "
+                             f"this engine uses {self._layout!r}")
         for k, a in self._state_arrays().items():
             a[...] = state[k]
         self.n = int(state["n"])
@@ -460,9 +425,14 @@ class ExponentialEngine:
         if self.backend == "numba":
             out = np.empty(x.size, dtype=complex)
             _set_threads(self.threads)
-            self._push_nb(x, n, self._order, self._us, self._start, self._jd_u_i, self._wstart_u,
-                          self._wflat, self._buf, self._rr, self._ri, self._er, self._ei, self._sr,
-                          self._si, out)
+            kern = _blocked()
+            pos = np.remainder(n, self._jd_u_i, out=self._pos)
+            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+            if hi > lo:
+                kern.advance(n, lo, hi, self._us, self._start, self._jd_u_i, pos, self._ring, self._rr,
+                             self._ri, self._er, self._ei, *self._states, self._F)
+            kern.taps(x, n, self._order, self._us, self._start, self._jd_u_i, pos, self._wrow, self._wtab,
+                      self._ring, self._F, out)
             self.n = n + 1
             return out.reshape(self.shape)
         xp, xin, S = self._xp, self._xin, self._S
