@@ -258,7 +258,12 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
     Returns (v, tau) as dicts over the active components.
     """
     v = {}
-    if 2 in tau_star:
+    done = {}  # components whose v (bonded points included) and tau are final
+    if 2 in tau_star and loops.compiled() and np.ndim(tau_star[2]) > 0:  # one compiled pass, same numbers
+        contact = delta[2] if getattr(law, "contact", False) else None
+        v[2], done[2] = loops.normal_velocity(tau_star[2], strength, eta[2], law.broken(state), contact, dt,
+                                              law.bonded)
+    elif 2 in tau_star:
         v2 = (tau_star[2] - strength) / eta[2]
         broken = law.broken(state)
         v2 = np.where(broken, v2, np.maximum(v2, 0.0)) if broken is not True else v2
@@ -266,7 +271,6 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
             v2 = np.maximum(v2, -delta[2] / dt)
         v[2] = v2
     shear = [c for c in SHEAR if c in tau_star]
-    done = {}  # components whose v (bonded points included) and tau are final
     if len(shear) == 2 and loops.compiled():  # one compiled pass, the same numbers as below
         v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded)
         shear = []

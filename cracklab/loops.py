@@ -8,7 +8,10 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
 * :func:`shear_velocity`: step (v) for the shear components, |v| = (|tau*| - S)^+ / eta
   along tau*, and the traction tau = tau* - eta v;
 * :func:`product_predict`: the product scheme's predictor for one channel
-  (cracklab.response), D, H and F of every mode in one pass.
+  (cracklab.response), D, H and F of every mode in one pass;
+* :func:`normal_velocity`: step (v) for the normal component (opening rate and
+  traction, with the law's broken mask, contact and bonded points);
+* :func:`add_scaled`: y += a x in place (the slip update, the load added to f).
 
 Each is a numba loop (compiled on first use, cached on disk); without numba the callers
 use the numpy expressions, which give the same numbers to the last bit (the same
@@ -67,7 +70,29 @@ def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
         F[i] = h + K[i] * V[i]
 
 
-_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop}
+def _normal_loop(t2, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded, has_bonded, v2, o2):
+    for i in range(t2.size):
+        t = t2[i]
+        v = (t - (strength[0] if scalar else strength[i])) / eta
+        if not all_broken and not broken[i] and v < 0.0:  # np.maximum(v, 0): NaN stays NaN
+            v = 0.0
+        if contact:
+            lim = -delta[i] / dt
+            if v < lim:
+                v = lim
+        if has_bonded and bonded[i]:
+            v = 0.0
+        v2[i] = v
+        o2[i] = t - eta * v
+
+
+def _axpy_loop(y, a, x):
+    for i in range(y.size):
+        y[i] += a * x[i]
+
+
+_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
+       "axpy": _axpy_loop}
 
 
 def rotate(c, s, a, b, inverse=False):
@@ -121,3 +146,40 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
       *(np.ascontiguousarray(np.broadcast_to(a, V.shape)).ravel() for a in (static, pre, K)), float(dt),
       H.ravel(), F.ravel())
     return H, F
+
+
+def _flat_mask(mask, shape):
+    """(flat bool array, present) for an optional mask broadcast to ``shape``."""
+    if mask is None:
+        return np.zeros(1, bool), False
+    return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
+
+
+def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None):
+    """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
+    (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
+    0 where ``bonded``; tau = tau* - eta v.  Returns (v, tau), the same numbers as the
+    numpy expressions of :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
+    S = np.asarray(strength, dtype=float)
+    scalar = S.size == 1
+    S = S.reshape(1) if scalar else np.ascontiguousarray(np.broadcast_to(S, tau2.shape)).ravel()
+    all_broken = broken is True
+    b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
+    bd, has_bonded = _flat_mask(bonded, tau2.shape)
+    contact = contact_delta is not None
+    d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
+    v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
+    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), S, scalar, float(eta), b, all_broken,
+                        contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
+    return v, tau
+
+
+def add_scaled(y, a, x):
+    """y += a x in place (y a C-contiguous float array; x of y's shape or broadcastable);
+    the same numbers as ``y += a * x``."""
+    f = _compiled("axpy")
+    if f is None or not y.flags.c_contiguous or np.shape(x) != y.shape:
+        y += a * x
+        return y
+    f(y.ravel(), float(a), np.ascontiguousarray(x, dtype=float).ravel())
+    return y

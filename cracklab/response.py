@@ -109,6 +109,12 @@ class Response:
 
         self.channels: dict[str, _Channel] = {name: channel(name)
                                               for name in active_channels(grid.plane, self.components)}
+        # work arrays reused every step: spectra of the two forward transforms of a step
+        # (displacement, velocity), engine outputs, and the f_j handed back (see functional)
+        fft = self.fft
+        self._spec = {slot: {c: fft.empty() for c in self.components} for slot in ("D", "V")}
+        self._S = {name: fft.empty() for name in self.channels}
+        self._f = {c: fft.empty(spectral=False) for c in self.components}
         self.n = 0
 
     @classmethod
@@ -155,8 +161,12 @@ class Response:
                 out[3] = F["III"]
         return out
 
-    def _forward(self, fields: dict) -> dict:
-        return self._split({c: self.fft.forward(fields[c]) for c in self.components})
+    def _forward(self, fields: dict, slot: str = "D") -> dict:
+        return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components})
+
+    def _inverse(self, F: dict) -> dict:
+        """f_j of the channel spectra F (destroyed), in the work arrays of the response."""
+        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in self._join(F).items()}
 
     # -- public -----------------------------------------------------------------------
     def predict(self, v_prev: dict) -> dict:
@@ -170,7 +180,7 @@ class Response:
             for ch in self.channels.values():
                 ch.H = None
             return {c: np.zeros(self.fft.shape) for c in self.components}
-        V = self._forward(v_prev)
+        V = self._forward(v_prev, "V")
         F = {}
         for name, ch in self.channels.items():
             if n == 1:
@@ -180,30 +190,33 @@ class Response:
                 ch.H = ch.static * ch.dknown + ch.pre * S
                 F[name] = ch.H + ch.K * V[name]
             else:  # the same, in one pass: dknown += dt V, H, F
-                ch.H, F[name] = product_predict(V[name], ch.engine.push(V[name]), ch.engine.start_weight(n), ch.v0,
-                                                ch.dknown, ch.static, ch.pre, ch.K, self.dt)
-        return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
+                ch.H, F[name] = product_predict(V[name], ch.engine.push(V[name], out=self._S[name]),
+                                                ch.engine.start_weight(n), ch.v0, ch.dknown, ch.static, ch.pre,
+                                                ch.K, self.dt)
+        return self._inverse(F)
 
     def correct(self, v_pred: dict) -> dict:
         """Product scheme: f_n with the current velocity taken as ``v_pred`` (the corrector)."""
-        V = self._forward(v_pred)
+        V = self._forward(v_pred, "V")
         F = {name: ch.H + ch.K * V[name] for name, ch in self.channels.items()}
-        return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
+        return self._inverse(F)
 
     def functional(self, delta: dict, v_prev: dict | None = None) -> dict:
         """f_j(x1, x3) at the current step, for each active component j.
 
         Displacement formulation: ``delta`` is delta_n. Velocity formulation: ``delta``
         is delta*_n = delta_{n-1} + dt v_{n-1}/2 and ``v_prev`` is v_{n-1}.
+        The arrays returned (here and by predict and correct) are work arrays of the
+        response: valid until its next call.
         """
         n = self.n
         D = self._forward(delta)
         F = {}
         if self.formulation == "displacement":
             for name, ch in self.channels.items():
-                F[name] = ch.pre * ch.engine.push(D[name])
+                F[name] = np.multiply(ch.engine.push(D[name], out=self._S[name]), ch.pre, out=self._S[name])
         else:
-            V = self._forward(v_prev) if n > 0 else None
+            V = self._forward(v_prev, "V") if n > 0 else None
             for name, ch in self.channels.items():
                 Fn = ch.static * D[name]
                 if n > 0:
@@ -213,4 +226,4 @@ class Response:
                     Fn = Fn + ch.pre * conv
                 F[name] = Fn
         self.n = n + 1
-        return {c: self.fft.inverse(Fc) for c, Fc in self._join(F).items()}
+        return self._inverse(F)

@@ -77,6 +77,8 @@ class Transforms:
         self.plane = grid.plane
         self.workers = int(workers or os.environ.get("CRACKLAB_FFT_THREADS", "1"))
         self.backend = backend or backend_name()
+        self.spectral_shape = grid.spectral_shape
+        self._scale = 1.0 / (self.shape[0] * self.shape[1])
         if self.backend == "pyfftw":
             self._plan()
 
@@ -99,21 +101,74 @@ class Transforms:
                                     direction="FFTW_BACKWARD", threads=self.workers, flags=flags)
         _save_wisdom()
 
-    def forward(self, x: np.ndarray) -> np.ndarray:
+    def empty(self, spectral: bool = True) -> np.ndarray:
+        """A work array the transforms read or write in place (``out=``, ``overwrite=``):
+        complex of the spectral shape, or real of the grid's shape (aligned for FFTW)."""
+        shape, dtype = (self.spectral_shape, complex) if spectral else (self.shape, float)
         if self.backend == "pyfftw":
-            self._fwd.input_array[...] = x[:, 0] if self.plane else x
-            out = self._fwd().copy()
-            return out[:, None] if self.plane else out
-        if self.plane:
-            return sfft.rfft(x[:, 0], workers=self.workers)[:, None]
-        return sfft.rfftn(x, axes=(0, 1), workers=self.workers)
+            return pyfftw.empty_aligned(shape, dtype=dtype)
+        return np.empty(shape, dtype=dtype)
 
-    def inverse(self, X: np.ndarray) -> np.ndarray:
+    def forward(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Spectrum of the real field x: a new array, or written into ``out`` (spectral shape)."""
         if self.backend == "pyfftw":
-            # copy in: a complex-to-real transform overwrites its input array
-            self._inv.input_array[...] = X[:, 0] if self.plane else X
-            out = self._inv().copy()  # normalised by 1/N like scipy's inverse
-            return out[:, None] if self.plane else out
+            fwd = self._fwd
+            fwd.input_array[...] = x[:, 0] if self.plane else x
+            if out is None:
+                fwd.execute()
+                res = fwd.output_array.copy()
+                return res[:, None] if self.plane else res
+            self._execute_into(fwd, fwd.input_array, out)
+            return out
         if self.plane:
-            return sfft.irfft(X[:, 0], n=self.shape[0], workers=self.workers)[:, None]
-        return sfft.irfftn(X, s=self.shape, axes=(0, 1), workers=self.workers)
+            res = sfft.rfft(x[:, 0], workers=self.workers)[:, None]
+        else:
+            res = sfft.rfftn(x, axes=(0, 1), workers=self.workers)
+        if out is None:
+            return res
+        out[...] = res
+        return out
+
+    def inverse(self, X: np.ndarray, out: np.ndarray | None = None, overwrite: bool = False) -> np.ndarray:
+        """Real field of the spectrum X (normalised by 1/N like scipy's inverse): a new array,
+        or written into ``out``; ``overwrite=True`` lets the transform destroy X (no copy in)."""
+        if self.backend == "pyfftw":
+            inv = self._inv
+            src = X[:, 0] if self.plane else X
+            if not (overwrite and out is not None and pyfftw.is_byte_aligned(src, inv.input_alignment)
+                    and src.flags.c_contiguous):
+                inv.input_array[...] = src  # a complex-to-real transform overwrites its input
+                src = inv.input_array
+            if out is None:
+                inv.execute()
+                res = inv.output_array * self._scale
+                return res[:, None] if self.plane else res
+            self._execute_into(inv, src, out)
+            np.multiply(out, self._scale, out=out)
+            return out
+        if self.plane:
+            res = sfft.irfft(X[:, 0], n=self.shape[0], workers=self.workers)[:, None]
+        else:
+            res = sfft.irfftn(X, s=self.shape, axes=(0, 1), workers=self.workers)
+        if out is None:
+            return res
+        out[...] = res
+        return out
+
+    def _execute_into(self, plan, src, out):
+        """Run ``plan`` from src into out (in place when out has the plan's alignment)."""
+        view = out[:, 0] if self.plane else out
+        own_in, own_out = plan.input_array, plan.output_array
+        if view.shape != own_out.shape:
+            raise ValueError(f"out has shape {out.shape}, the transform gives {own_out.shape}")
+        if not ((pyfftw.is_byte_aligned(view, plan.output_alignment) and pyfftw.is_byte_aligned(src, plan.input_alignment)) and view.flags.c_contiguous):
+            if src is not own_in:
+                own_in[...] = src
+            plan.execute()
+            view[...] = own_out
+            return
+        plan.update_arrays(src, view)
+        try:
+            plan.execute()
+        finally:
+            plan.update_arrays(own_in, own_out)  # the plan keeps its own arrays between calls

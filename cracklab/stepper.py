@@ -8,6 +8,7 @@ import numpy as np
 
 from .errors import SimulationError
 from .laws import solve_velocity
+from .loops import add_scaled
 from .response import Response
 from .spectral import Transforms
 
@@ -115,9 +116,9 @@ class Stepper:
                 if n > 0:  # predictor: the law on a copy of its state
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
-                    tau0 = load.at(t, comps, _crack_length(law, pstate, load, area, width, l0))
-                    vp, _ = solve_velocity(law, pstate, {c: tau0[c] + f[c] for c in comps}, trial, eta, dt,
-                                           law.strength(pstate, t, grid))
+                    # tau* = tau0 + f, in f (the response's work arrays, not used after)
+                    tau_star = load.add_to(f, t, comps, _crack_length(law, pstate, load, area, width, l0))
+                    vp, _ = solve_velocity(law, pstate, tau_star, trial, eta, dt, law.strength(pstate, t, grid))
                     f = response.correct(vp)
                     trial = {c: known[c] + 0.5 * dt * vp[c] for c in comps}
             elif velocity:
@@ -127,7 +128,7 @@ class Stepper:
             else:
                 if n > 0:
                     for c in comps:
-                        delta[c] += dt * v[c]
+                        add_scaled(delta[c], dt, v[c])
                 f = response.functional(delta)
                 trial = delta
             law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
@@ -137,9 +138,8 @@ class Stepper:
                     # Loading.factor scales by sqrt(l0 / l): give it the initial length
                     load = self.load = dataclasses.replace(load, l0=l0)
             length = _crack_length(law, lstate, load, area, width, l0)
-            tau0 = load.at(t, comps, length)
             strength = law.strength(lstate, t, grid)
-            tau_star = {c: tau0[c] + f[c] for c in comps}
+            tau_star = load.add_to(f, t, comps, length)  # tau0 + f, in f
             v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)

@@ -413,8 +413,9 @@ class ExponentialEngine:
                 v = state["cache" + k]
                 setattr(self, k, np.array(v) if isinstance(v, np.ndarray) else v)
 
-    def push(self, x: np.ndarray) -> np.ndarray:
-        """Push x_n (shape of gamma) and return S_n = sum_j w_{j+lag} x_{n-j} (same shape)."""
+    def push(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """Push x_n (shape of gamma) and return S_n = sum_j w_{j+lag} x_{n-j} (same shape;
+        written into ``out`` if given)."""
         x = np.asarray(x, dtype=complex).ravel()
         if x.size != self.gamma.size:
             raise ValueError(f"x has {x.size} values, expected {self.gamma.size}")
@@ -423,7 +424,8 @@ class ExponentialEngine:
             raise RuntimeError(f"the exponential engine was built for T <= {self.fit.T_end:g} "
                                f"({int(self._n_max)} steps); step {n} is beyond its fitted range")
         if self.backend == "numba":
-            out = np.empty(x.size, dtype=complex)
+            res = out if out is not None and out.dtype == complex and out.flags.c_contiguous else None
+            flat = np.empty(x.size, dtype=complex) if res is None else res.reshape(-1)
             _set_threads(self.threads)
             kern = _blocked()
             pos = np.remainder(n, self._jd_u_i, out=self._pos)
@@ -432,9 +434,14 @@ class ExponentialEngine:
                 kern.advance(n, lo, hi, self._us, self._start, self._jd_u_i, pos, self._ring, self._rr,
                              self._ri, self._er, self._ei, *self._states, self._F)
             kern.taps(x, n, self._order, self._us, self._start, self._jd_u_i, pos, self._wrow, self._wtab,
-                      self._ring, self._F, out)
+                      self._ring, self._F, flat)
             self.n = n + 1
-            return out.reshape(self.shape)
+            if res is not None:
+                return res
+            if out is not None:
+                out[...] = flat.reshape(self.shape)
+                return out
+            return flat.reshape(self.shape)
         xp, xin, S = self._xp, self._xin, self._S
         np.take(x, self._perm, out=xp)
         Sf = S.view(float)
@@ -450,10 +457,13 @@ class ExponentialEngine:
         sig += xin.view(float).reshape(-1, 2, 1)
         m = S.size
         Sf.reshape(m, 2)[...] += np.einsum("mkq,mq->mk", sig.view(float), self._ef)
-        out = np.empty(m, dtype=complex)
-        out[self._perm] = S
+        res = np.empty(m, dtype=complex)
+        res[self._perm] = S
         self.n = n + 1
-        return out.reshape(self.shape)
+        if out is not None:
+            out[...] = res.reshape(self.shape)
+            return out
+        return res.reshape(self.shape)
 
     def start_weight(self, n: int) -> np.ndarray:
         """E_0(n) of the product rule (the start-up term on x_0), for every mode (n >= lag).
