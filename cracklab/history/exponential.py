@@ -57,8 +57,6 @@ _RESYNC = 512
 ENGINE_T0 = 4.0
 #: steps the compiled loop advances the states at once, and taps it keeps at least (blocked.py)
 _BLOCK = 8
-#: rings of up to this many taps get a row of weights per ring position (blocked.taps)
-_ROTATED_MAX = 16
 _SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact", "product")  # recompute the powers of weight() exactly every so many calls
 
 
@@ -321,44 +319,42 @@ class ExponentialEngine:
             self._S = np.zeros(m, dtype=complex)
 
     def _setup_blocked(self, rho_u, e_u):
-        """Tables and states of the compiled loop (blocked.py): modes sorted by gamma."""
-        m, jd_u = self.gamma.size, self._jd_u
-        order = np.argsort(self._inv, kind="stable")
-        us = self._inv[order].astype(np.int64)
-        self._order, self._us = order.astype(np.int64), us
+        """Tables and states of the compiled loops (blocked.py).
+
+        taps sweeps the modes in their natural order (rings and F by mode); advance works
+        through the modes sorted by gamma, one eighth per step (states by sorted position,
+        coefficient rows read in order)."""
+        m, jd_u, inv = self.gamma.size, self._jd_u, self._inv
+        self._inv_i = np.ascontiguousarray(inv, dtype=np.int64)
+        order = np.argsort(inv, kind="stable")
+        self._order, self._us = order.astype(np.int64), inv[order].astype(np.int64)
         self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
-        self._pos = np.zeros(jd_u.size, dtype=np.int64)
-        self._start = np.zeros(m, dtype=np.int64)  # ring of mode i: Jd real parts, then Jd imaginary parts
+        jd = jd_u[inv]
+        self._start = np.zeros(m, dtype=np.int64)  # ring of mode m: Jd real parts, then Jd imaginary parts
         if m:
-            self._start[1:] = np.cumsum(2 * jd_u[us])[:-1]
+            self._start[1:] = np.cumsum(2 * jd)[:-1]
+        self._start_sorted = np.ascontiguousarray(self._start[order])
         self._bounds = [m * g // _BLOCK for g in range(_BLOCK + 1)]
-        # tap weights: a row per ring position for short rings, w_j for long ones (blocked.taps)
-        rows = np.where(jd_u <= _ROTATED_MAX, jd_u * jd_u, jd_u)
-        self._wrow = np.zeros(jd_u.size, dtype=np.int64)
-        if jd_u.size:
-            self._wrow[1:] = np.cumsum(rows)[:-1]
-        wtab = np.empty(int(rows.sum()))
+        # tap weights by mode (blocked.taps): slot r of the ring (oldest first) gets w_{Jd-1-r}
+        w = np.empty(int(jd.sum()))
         for J in np.unique(jd_u):
-            sel = np.flatnonzero(jd_u == J)
-            w = self._wflat[self._wstart_u[sel][:, None] + np.arange(J)[None, :]]  # (n_u, J): w_j
-            if J <= _ROTATED_MAX:
-                p, r = np.meshgrid(np.arange(J), np.arange(J), indexing="ij")
-                w = w[:, (p - r) % J].reshape(sel.size, J * J)  # slot r holds x_{n - (p - r) mod J}
-            wtab[self._wrow[sel][:, None] + np.arange(w.shape[1])[None, :]] = w
-        self._wtab = wtab
+            sel = np.flatnonzero(jd == J)
+            rows = self._wflat[self._wstart_u[inv[sel]][:, None] + np.arange(J)[None, ::-1]]
+            w[self._start[sel][:, None] // 2 + np.arange(J)[None, :]] = rows
+        self._wmode = w
         self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
         self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
-        self._ring = np.zeros(int(2 * jd_u[us].sum()))
+        self._ring = np.zeros(int(2 * jd.sum()))
         self._states = [np.zeros((m, self.pairs)) for _ in range(4)]  # Re and Im of s_p for Re x, then Im x
-        self._F = np.zeros((_BLOCK, m), dtype=complex)  # tail sums of the next BLOCK steps
+        self._F = np.zeros((m, _BLOCK), dtype=complex)  # tail sums of the next BLOCK steps, by mode
 
     # ------------------------------------------------------------------ public
     @property
     def nbytes(self) -> int:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
-            arrs = [self._ring, self._wflat, self._wtab, self._rr, self._ri, self._er, self._ei, self._F,
-                    self._order, self._us, self._start, self._pos, *self._states]
+            arrs = [self._ring, self._wflat, self._wmode, self._rr, self._ri, self._er, self._ei, self._F,
+                    self._order, self._us, self._inv_i, self._start, self._start_sorted, *self._states]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -428,13 +424,11 @@ class ExponentialEngine:
             flat = np.empty(x.size, dtype=complex) if res is None else res.reshape(-1)
             _set_threads(self.threads)
             kern = _blocked()
-            pos = np.remainder(n, self._jd_u_i, out=self._pos)
             lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
             if hi > lo:
-                kern.advance(n, lo, hi, self._us, self._start, self._jd_u_i, pos, self._ring, self._rr,
-                             self._ri, self._er, self._ei, *self._states, self._F)
-            kern.taps(x, n, self._order, self._us, self._start, self._jd_u_i, pos, self._wrow, self._wtab,
-                      self._ring, self._F, flat)
+                kern.advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
+                             self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+            kern.taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat)
             self.n = n + 1
             if res is not None:
                 return res
