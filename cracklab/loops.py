@@ -11,7 +11,9 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
   (cracklab.response), D, H and F of every mode in one pass;
 * :func:`normal_velocity`: step (v) for the normal component (opening rate and
   traction, with the law's broken mask, contact and bonded points);
-* :func:`add_scaled`: y += a x in place (the slip update, the load added to f).
+* :func:`add_scaled`: y += a x in place (the slip update, the load added to f), and
+  :func:`plus_scaled` (x + a y, new), :func:`add_mean_step` (y += a (x1 + x2)),
+  :func:`plus_product` (H + K V) for the product scheme's trial slips and corrector.
 
 Each is a numba loop (compiled on first use, cached on disk); without numba the callers
 use the numpy expressions, which give the same numbers to the last bit (the same
@@ -91,21 +93,37 @@ def _axpy_loop(y, a, x):
         y[i] += a * x[i]
 
 
+def _xpay_loop(out, x, a, y):
+    for i in range(out.size):
+        out[i] = x[i] + a * y[i]
+
+
+def _mean_step_loop(y, a, x1, x2):
+    for i in range(y.size):
+        y[i] += a * (x1[i] + x2[i])
+
+
+def _hkv_loop(out, H, K, V):
+    for i in range(out.size):
+        out[i] = H[i] + K[i] * V[i]
+
+
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
-       "axpy": _axpy_loop}
+       "axpy": _axpy_loop, "xpay": _xpay_loop, "mean_step": _mean_step_loop, "hkv": _hkv_loop}
 
 
-def rotate(c, s, a, b, inverse=False):
+def rotate(c, s, a, b, inverse=False, out=None):
     """(c a + s b, -s a + c b), Eq. (28): components (1, 3) -> channels (II, III) of each
     mode (c = k1/q, s = k3/q); ``inverse`` gives (c a - s b, s a + c b), channels ->
     components. The compiled pass needs a, b, c, s of one shape; other shapes broadcast
-    in numpy."""
+    in numpy. ``out``: two arrays to write into (not a or b)."""
     sign = -1.0 if inverse else 1.0
     f = _compiled("rotate")
     a, b = np.asarray(a), np.asarray(b)
     if f is None or not (a.shape == b.shape == np.shape(c) == np.shape(s)) or a.dtype != b.dtype:
         return c * a + sign * s * b, c * b - sign * s * a  # broadcasting (e.g. over time)
-    o1, o2 = np.empty_like(a), np.empty_like(a)
+    ok = out is not None and all(o.shape == a.shape and o.dtype == a.dtype and o.flags.c_contiguous for o in out)
+    o1, o2 = out if ok else (np.empty_like(a), np.empty_like(a))
     f(c.ravel(), s.ravel(), np.ascontiguousarray(a).ravel(), np.ascontiguousarray(b).ravel(), sign,
       o1.ravel(), o2.ravel())
     return o1, o2
@@ -183,3 +201,41 @@ def add_scaled(y, a, x):
         return y
     f(y.ravel(), float(a), np.ascontiguousarray(x, dtype=float).ravel())
     return y
+
+
+def _same(*arrays):
+    shape = arrays[0].shape
+    return all(isinstance(a, np.ndarray) and a.shape == shape and a.flags.c_contiguous for a in arrays)
+
+
+def plus_scaled(x, a, y):
+    """x + a y as a new array (the same numbers as ``x + a * y``)."""
+    f = _compiled("xpay")
+    if f is None or not _same(x, y) or x.dtype != float or y.dtype != float:
+        return x + a * y
+    out = np.empty_like(x)
+    f(out.ravel(), x.ravel(), float(a), y.ravel())
+    return out
+
+
+def add_mean_step(y, a, x1, x2):
+    """y += a (x1 + x2) in place (the same numbers as ``y += a * (x1 + x2)``)."""
+    f = _compiled("mean_step")
+    if f is None or not _same(y, x1, x2) or not (y.dtype == x1.dtype == x2.dtype == float):
+        y += a * (x1 + x2)
+        return y
+    f(y.ravel(), float(a), x1.ravel(), x2.ravel())
+    return y
+
+
+def plus_product(H, K, V, out=None):
+    """H + K V (complex H, V; real K per mode), into ``out`` when given (the same numbers as
+    ``H + K * V``)."""
+    f = _compiled("hkv")
+    K = np.broadcast_to(K, V.shape)
+    if f is None or not _same(H, V) or not K.flags.c_contiguous:
+        return H + K * V
+    if out is None or not _same(out, H) or out.dtype != H.dtype:
+        out = np.empty_like(H)
+    f(out.ravel(), H.ravel(), K.ravel(), V.ravel())
+    return out

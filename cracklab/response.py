@@ -26,7 +26,7 @@ import numpy as np
 
 from .history import make_engine
 from .kernels import Z as Z_kernel
-from .loops import product_predict, rotate
+from .loops import plus_product, product_predict, rotate
 from .spectral import Transforms
 
 
@@ -42,14 +42,15 @@ def active_channels(plane: bool, components) -> tuple:
     return out
 
 
-def split_channels(X: dict, channels, shear3d: bool, c, s) -> dict:
+def split_channels(X: dict, channels, shear3d: bool, c, s, out_arrays=None) -> dict:
     """Component spectra -> channel spectra (rotation of Eq. 28 for 3D shear; ``c``, ``s``
-    are k1/q and k3/q on the spectral layout of X)."""
+    are k1/q and k3/q on the spectral layout of X; ``out_arrays``: two arrays for the
+    rotated II, III spectra)."""
     out = {}
     if "I" in channels:
         out["I"] = X[2]
     if shear3d:
-        out["II"], out["III"] = rotate(c, s, X[1], X[3])
+        out["II"], out["III"] = rotate(c, s, X[1], X[3], out=out_arrays)
     else:
         if "II" in channels:
             out["II"] = X[1]
@@ -115,6 +116,8 @@ class Response:
         self._spec = {slot: {c: fft.empty() for c in self.components} for slot in ("D", "V")}
         self._S = {name: fft.empty() for name in self.channels}
         self._f = {c: fft.empty(spectral=False) for c in self.components}
+        # 3D shear: the rotated II/III spectra of each forward slot, and of the way back
+        self._rot = {k: (fft.empty(), fft.empty()) for k in ("D", "V", "join")} if self.shear3d else {}
         self.n = 0
 
     @classmethod
@@ -145,15 +148,15 @@ class Response:
                 setattr(ch, k, None if cs[k] is None else np.array(cs[k]))
 
     # -- spectral helpers ------------------------------------------------------------
-    def _split(self, X: dict) -> dict:
-        return split_channels(X, self.channels, self.shear3d, self.c, self.s)
+    def _split(self, X: dict, slot: str = "D") -> dict:
+        return split_channels(X, self.channels, self.shear3d, self.c, self.s, self._rot.get(slot))
 
     def _join(self, F: dict) -> dict:
         out = {}
         if "I" in F:
             out[2] = F["I"]
         if self.shear3d:
-            out[1], out[3] = rotate(self.c, self.s, F["II"], F["III"], inverse=True)
+            out[1], out[3] = rotate(self.c, self.s, F["II"], F["III"], inverse=True, out=self._rot["join"])
         else:
             if "II" in F:
                 out[1] = F["II"]
@@ -162,7 +165,7 @@ class Response:
         return out
 
     def _forward(self, fields: dict, slot: str = "D") -> dict:
-        return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components})
+        return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components}, slot)
 
     def _inverse(self, F: dict) -> dict:
         """f_j of the channel spectra F (destroyed), in the work arrays of the response."""
@@ -198,7 +201,7 @@ class Response:
     def correct(self, v_pred: dict) -> dict:
         """Product scheme: f_n with the current velocity taken as ``v_pred`` (the corrector)."""
         V = self._forward(v_pred, "V")
-        F = {name: ch.H + ch.K * V[name] for name, ch in self.channels.items()}
+        F = {name: plus_product(ch.H, ch.K, V[name], out=self._S[name]) for name, ch in self.channels.items()}
         return self._inverse(F)
 
     def functional(self, delta: dict, v_prev: dict | None = None) -> dict:

@@ -8,7 +8,7 @@ import numpy as np
 
 from .errors import SimulationError
 from .laws import solve_velocity
-from .loops import add_scaled
+from .loops import add_mean_step, add_scaled, plus_scaled
 from .response import Response
 from .spectral import Transforms
 
@@ -110,9 +110,9 @@ class Stepper:
             load, l0 = self.load, self.l0
             t = n * dt
             if product:
-                known = {c: delta[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
+                known = {c: plus_scaled(delta[c], 0.5 * dt, v[c]) for c in comps} if n > 0 else delta
                 f = response.predict(v)
-                trial = {c: known[c] + 0.5 * dt * v[c] for c in comps} if n > 0 else delta
+                trial = {c: plus_scaled(known[c], 0.5 * dt, v[c]) for c in comps} if n > 0 else delta
                 if n > 0:  # predictor: the law on a copy of its state
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
@@ -120,7 +120,7 @@ class Stepper:
                     tau_star = load.add_to(f, t, comps, _crack_length(law, pstate, load, area, width, l0))
                     vp, _ = solve_velocity(law, pstate, tau_star, trial, eta, dt, law.strength(pstate, t, grid))
                     f = response.correct(vp)
-                    trial = {c: known[c] + 0.5 * dt * vp[c] for c in comps}
+                    trial = {c: plus_scaled(known[c], 0.5 * dt, vp[c]) for c in comps}
             elif velocity:
                 dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
                 f = response.functional(dstar, v)
@@ -144,7 +144,7 @@ class Stepper:
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
                 for c in comps:
-                    delta[c] += 0.5 * dt * (v[c] + v_new[c])
+                    add_mean_step(delta[c], 0.5 * dt, v[c], v_new[c])
             v = v_new
             self.v, self.tau, self.n = v, tau, n + 1
             self._check(n, t, v, load.factor(t, length))
