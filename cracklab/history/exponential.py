@@ -28,8 +28,8 @@ runs the per-step recursion vectorised over the modes.  Both give the same sums 
 round-off (docs/fast_engine.md).  The product
 rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
 
-Memory per mode is fixed at construction (about 2 P complex states, Jd + 8 buffered values,
-8 outputs).  Modes with gamma = 0 (q = 0) get exact weights K(0) for all k (a running sum).
+Memory per mode is fixed at construction (2 P complex states, Jd >= 8 buffered values and
+tap weights, 8 tail sums).  Modes with gamma = 0 (q = 0) get exact weights K(0) for all k (a running sum).
 See docs/fast_engine.md.
 
 ``window`` (a truncated history) is not supported: the engine keeps the whole history by
