@@ -5,9 +5,10 @@ inputs in a ring (the direct taps) and, per term p, the states s_p of Re x and I
 (``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, tail sum ``Re sum_p e_p s_p``).  Because the
 input that enters the states at step n is Jd >= 8 steps old, the states of a mode can be
 advanced through the next :data:`BLOCK` steps at once, from inputs already in its ring:
-:func:`advance` does so for one eighth of the modes at every step (the modes sorted by
-gamma, eighth n mod 8 at step n), keeping the states in registers for the eight steps and
-storing the eight tail sums in ``F``; :func:`taps` then, for every mode in its natural
+:func:`advance` does so for one eighth of the modes at every step (eighth n mod 8 of
+the natural mode order at step n, each eighth sorted by gamma so that the coefficient
+rows are read in order), keeping the states in registers for the eight steps and storing
+the eight tail sums in ``F``; :func:`taps` then, for every mode in its natural
 order, shifts x_n into the ring and returns ``S_n = sum_j w_j x_{n-j}`` (j < Jd) plus
 the tail sum of step n.
 The sums are those of the per-step recursion, reordered (fast-math); the states and the
@@ -27,7 +28,8 @@ import numba
 # steps are written out below)
 from .exponential import _BLOCK as BLOCK
 
-assert BLOCK == 8
+if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
+    raise ImportError(f"cracklab.history.blocked is written for blocks of 8 steps, not {BLOCK}")
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
@@ -37,8 +39,8 @@ def advance(n, lo, hi, order, us, start, jd_u, ring, RR, RI, ER, EI, Ar, Ai, Br,
 
     Inputs: x_{n+j-Jd} = ring[start + j] (the ring holds x_{n-Jd} .. x_{n-1} oldest first,
     real parts then imaginary parts at +Jd; ``start`` per sorted position), read before step
-    n shifts x_n in.  RR/RI: rho_p,
-    ER/EI: e_p per unique gamma (rows ``us``); the states Ar..Bi per sorted position.
+    n shifts x_n in.  RR/RI: rho_p, ER/EI: e_p per unique gamma (rows ``us``); the states
+    Ar..Bi per sorted position.
     """
     P = RR.shape[1]
     nc = 16
