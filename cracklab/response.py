@@ -217,7 +217,7 @@ class Response:
         F = {}
         if self.formulation == "displacement":
             for name, ch in self.channels.items():
-                F[name] = np.multiply(ch.engine.push(D[name], out=self._S[name]), ch.pre, out=self._S[name])
+                F[name] = ch.engine.push(D[name], out=self._S[name], scale=ch.pre)
         else:
             V = self._forward(v_prev, "V") if n > 0 else None
             for name, ch in self.channels.items():

@@ -172,8 +172,9 @@ def advance(n, lo, hi, order, us, start, jd_u, ring, RR, RI, ER, EI, Ar, Ai, Br,
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps(x, n, inv, start, jd_u, w, ring, F, out):
-    """Shift x_n into every ring and return out[m] = sum_{j < Jd} w_j x_{n-j} + F[m, n % 8].
+def taps(x, n, inv, start, jd_u, w, ring, F, out, scale, scaled):
+    """Shift x_n into every ring and return out[m] = sum_{j < Jd} w_j x_{n-j} + F[m, n % 8]
+    (times scale[m] if ``scaled``).
 
     Modes in their natural order: x, out, the rings, the weights and F are each read or
     written in one sweep.  The ring of mode m (``start[m]``) holds the last Jd inputs
@@ -214,4 +215,7 @@ def taps(x, n, inv, start, jd_u, w, ring, F, out):
                     ring[b0 + J + r] = b
                 ring[b0 + J - 1] = v.real
                 ring[b0 + 2 * J - 1] = v.imag
+            if scaled:
+                accr *= scale[m]
+                acci *= scale[m]
             out[m] = complex(accr, acci)

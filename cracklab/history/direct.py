@@ -71,8 +71,9 @@ class DirectEngine:
             buf[p + new] = v
         self._buf, self._bufcap = buf, new
 
-    def push(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """Push x_n (shape of gamma) and return S_n of the same shape (written into ``out`` if given)."""
+    def push(self, x: np.ndarray, out: np.ndarray | None = None, scale: np.ndarray | None = None) -> np.ndarray:
+        """Push x_n (shape of gamma) and return S_n of the same shape (written into ``out`` if
+        given; multiplied by ``scale``, real, shape of gamma, if given)."""
         x = np.asarray(x).ravel()
         n = self.n
         length = n + 1 if self.cap is None else min(n + 1, self.cap)
@@ -89,6 +90,8 @@ class DirectEngine:
         self._buf[p + cap] = x
         hist = self._buf[p:p + length].view(float)       # newest first, (re, im) interleaved
         s = np.einsum("jm,jm->m", self._w2[:length], hist).view(complex)
+        if scale is not None:
+            s *= np.broadcast_to(scale, self.shape).reshape(-1)
         self.n = n + 1
         if out is not None:
             out[...] = s.reshape(self.shape)

@@ -171,6 +171,7 @@ def _set_threads(threads):
 
 
 _BLOCKED = None
+_ONE = np.ones(1)
 
 
 def _blocked():
@@ -411,9 +412,9 @@ class ExponentialEngine:
                 v = state["cache" + k]
                 setattr(self, k, np.array(v) if isinstance(v, np.ndarray) else v)
 
-    def push(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    def push(self, x: np.ndarray, out: np.ndarray | None = None, scale: np.ndarray | None = None) -> np.ndarray:
         """Push x_n (shape of gamma) and return S_n = sum_j w_{j+lag} x_{n-j} (same shape;
-        written into ``out`` if given)."""
+        written into ``out`` if given; multiplied by ``scale``, real, shape of gamma, if given)."""
         x = np.asarray(x, dtype=complex).ravel()
         if x.size != self.gamma.size:
             raise ValueError(f"x has {x.size} values, expected {self.gamma.size}")
@@ -430,7 +431,9 @@ class ExponentialEngine:
             if hi > lo:
                 kern.advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
                              self._rr, self._ri, self._er, self._ei, *self._states, self._F)
-            kern.taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat)
+            sc = None if scale is None else np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float)
+            kern.taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
+                      _ONE if sc is None else sc.reshape(-1), sc is not None)
             self.n = n + 1
             if res is not None:
                 return res
@@ -455,6 +458,8 @@ class ExponentialEngine:
         Sf.reshape(m, 2)[...] += np.einsum("mkq,mq->mk", sig.view(float), self._ef)
         res = np.empty(m, dtype=complex)
         res[self._perm] = S
+        if scale is not None:
+            res *= np.broadcast_to(scale, self.shape).reshape(-1)
         self.n = n + 1
         if out is not None:
             out[...] = res.reshape(self.shape)
