@@ -9,6 +9,8 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
   along tau*, and the traction tau = tau* - eta v;
 * :func:`product_predict`: the product scheme's predictor for one channel
   (cracklab.response), D, H and F of every mode in one pass;
+* :func:`shear_correct`, :func:`shear_predict`: the product scheme's corrector and
+  predictor for the 3D shear channels with the rotations of Eq. (28) in the same pass;
 * :func:`normal_velocity`: step (v) for the normal component (opening rate and
   traction, with the law's broken mask, contact and bonded points);
 * :func:`add_scaled`: y += a x in place (the slip update, the load added to f), and
@@ -108,7 +110,41 @@ def _hkv_loop(out, H, K, V):
         out[i] = H[i] + K[i] * V[i]
 
 
-_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
+def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, F1, F3):
+    for i in range(c.size):
+        cc = c[i]
+        ss = 1.0 * s[i]          # Eq. (28): components -> channels (rotate)
+        x = X1[i]
+        y = X3[i]
+        v2 = cc * x + ss * y
+        v3 = cc * y - ss * x
+        f2 = H2[i] + K2[i] * v2  # the corrector, each channel (plus_product)
+        f3 = H3[i] + K3[i] * v3
+        ss = -1.0 * s[i]         # and back (rotate, inverse)
+        F1[i] = cc * f2 + ss * f3
+        F3[i] = cc * f3 - ss * f2
+
+
+def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03, v03, dk3, st3, pre3, K3, dt,
+                        H2, H3, F1, F3):
+    for i in range(c.size):
+        d = dk2[i] + dt * V2[i]  # the predictor, each channel (product_predict)
+        dk2[i] = d
+        h = st2[i] * d + pre2[i] * (S2[i] + e02[i] * v02[i])
+        H2[i] = h
+        f2 = h + K2[i] * V2[i]
+        d = dk3[i] + dt * V3[i]
+        dk3[i] = d
+        h = st3[i] * d + pre3[i] * (S3[i] + e03[i] * v03[i])
+        H3[i] = h
+        f3 = h + K3[i] * V3[i]
+        cc = c[i]
+        ss = -1.0 * s[i]         # channels -> components (rotate, inverse)
+        F1[i] = cc * f2 + ss * f3
+        F3[i] = cc * f3 - ss * f2
+
+
+_PY = {"shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
        "axpy": _axpy_loop, "xpay": _xpay_loop, "mean_step": _mean_step_loop, "hkv": _hkv_loop}
 
 
@@ -239,3 +275,41 @@ def plus_product(H, K, V, out=None):
         out = np.empty_like(H)
     f(out.ravel(), H.ravel(), K.ravel(), V.ravel())
     return out
+
+
+def _fusable(*arrays):
+    shape = arrays[0].shape
+    return all(isinstance(a, np.ndarray) and a.shape == shape and a.flags.c_contiguous for a in arrays)
+
+
+def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out):
+    """Corrector for 3D shear in one pass: V = rotate(X1, X3) (Eq. 28), F = H + K V per
+    channel, and F back to components, into ``out`` = (F1, F3); the same numbers as
+    :func:`rotate`, :func:`plus_product`, :func:`rotate` (inverse) in turn.  Returns
+    None when the pass cannot run (no numba, or arrays it cannot take)."""
+    f = _compiled("shear_correct")
+    arrs = (c, s, X1, X3, H2, K2, H3, K3) + tuple(out)
+    if f is None or not _fusable(*arrs) or X1.dtype != complex or H2.dtype != complex or out[0].dtype != complex:
+        return None
+    f(*(a.ravel() for a in arrs))
+    return out
+
+
+def shear_predict(c, s, ch2, ch3, dt, out):
+    """Predictor for 3D shear in one pass: for each channel ``(V, S, e0, v0, dknown, static,
+    pre, K)`` dknown += dt V, H = static dknown + pre (S + e0 v0), F = H + K V (as
+    :func:`product_predict`), then F back to components into ``out`` = (F1, F3).  Returns
+    (H2, H3), or None when the pass cannot run."""
+    f = _compiled("shear_predict")
+    if f is None:
+        return None
+    shape = np.shape(c)
+    chans = [[np.ascontiguousarray(np.broadcast_to(a, shape)) if i >= 5 else a for i, a in enumerate(ch)]
+             for ch in (ch2, ch3)]
+    arrs = [c, s, *chans[0], *chans[1], *out]
+    if not _fusable(*arrs) or any(a.dtype != complex for a in (chans[0][0], chans[0][4], chans[1][4], out[0])):
+        return None
+    H2, H3 = np.empty(shape, dtype=complex), np.empty(shape, dtype=complex)
+    f(c.ravel(), s.ravel(), *(a.ravel() for a in chans[0]), *(a.ravel() for a in chans[1]), float(dt),
+      H2.ravel(), H3.ravel(), out[0].ravel(), out[1].ravel())
+    return H2, H3

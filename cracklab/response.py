@@ -26,7 +26,7 @@ import numpy as np
 
 from .history import make_engine
 from .kernels import Z as Z_kernel
-from .loops import plus_product, product_predict, rotate
+from .loops import plus_product, product_predict, rotate, shear_correct, shear_predict
 from .spectral import Transforms
 
 
@@ -185,6 +185,20 @@ class Response:
             return {c: np.zeros(self.fft.shape) for c in self.components}
         V = self._forward(v_prev, "V")
         F = {}
+        if n > 1 and self.shear3d and "I" not in self.channels:
+            # II and III in one compiled pass, back to components in the same pass
+            chans = [self.channels[k] for k in ("II", "III")]
+            args = [(V[k], ch.engine.push(V[k], out=self._S[k]), ch.engine.start_weight(n), ch.v0, ch.dknown,
+                     ch.static, ch.pre, ch.K) for k, ch in zip(("II", "III"), chans)]
+            HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"])
+            if HH is not None:
+                chans[0].H, chans[1].H = HH
+                F1, F3 = self._rot["join"]
+                return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in ((1, F1), (3, F3))}
+            # not fusable: the same step channel by channel (the engines were pushed above)
+            for (Vk, Sk, e0, v0, dk, st, pre, K), k, ch in zip(args, ("II", "III"), chans):
+                ch.H, F[k] = product_predict(Vk, Sk, e0, v0, dk, st, pre, K, self.dt)
+            return self._inverse(F)
         for name, ch in self.channels.items():
             if n == 1:
                 ch.v0 = V[name].copy()
@@ -200,7 +214,16 @@ class Response:
 
     def correct(self, v_pred: dict) -> dict:
         """Product scheme: f_n with the current velocity taken as ``v_pred`` (the corrector)."""
-        V = self._forward(v_pred, "V")
+        if self.shear3d and "I" not in self.channels:
+            # rotation, corrector and rotation back in one compiled pass
+            X = {c: self.fft.forward(v_pred[c], out=self._spec["V"][c]) for c in self.components}
+            II, III = self.channels["II"], self.channels["III"]
+            out = shear_correct(self.c, self.s, X[1], X[3], II.H, II.K, III.H, III.K, self._rot["join"])
+            if out is not None:
+                return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in zip((1, 3), out)}
+            V = self._split(X, "V")
+        else:
+            V = self._forward(v_pred, "V")
         F = {name: plus_product(ch.H, ch.K, V[name], out=self._S[name]) for name, ch in self.channels.items()}
         return self._inverse(F)
 
