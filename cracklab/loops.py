@@ -295,11 +295,11 @@ def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out):
     return out
 
 
-def shear_predict(c, s, ch2, ch3, dt, out):
+def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None)):
     """Predictor for 3D shear in one pass: for each channel ``(V, S, e0, v0, dknown, static,
     pre, K)`` dknown += dt V, H = static dknown + pre (S + e0 v0), F = H + K V (as
     :func:`product_predict`), then F back to components into ``out`` = (F1, F3).  Returns
-    (H2, H3), or None when the pass cannot run."""
+    (H2, H3), written into the arrays ``H`` where given, or None when the pass cannot run."""
     f = _compiled("shear_predict")
     if f is None:
         return None
@@ -309,7 +309,8 @@ def shear_predict(c, s, ch2, ch3, dt, out):
     arrs = [c, s, *chans[0], *chans[1], *out]
     if not _fusable(*arrs) or any(a.dtype != complex for a in (chans[0][0], chans[0][4], chans[1][4], out[0])):
         return None
-    H2, H3 = np.empty(shape, dtype=complex), np.empty(shape, dtype=complex)
+    H2, H3 = (h if isinstance(h, np.ndarray) and h.shape == shape and h.dtype == complex and h.flags.c_contiguous
+              else np.empty(shape, dtype=complex) for h in H)
     f(c.ravel(), s.ravel(), *(a.ravel() for a in chans[0]), *(a.ravel() for a in chans[1]), float(dt),
       H2.ravel(), H3.ravel(), out[0].ravel(), out[1].ravel())
     return H2, H3

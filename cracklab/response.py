@@ -190,7 +190,8 @@ class Response:
             chans = [self.channels[k] for k in ("II", "III")]
             args = [(V[k], ch.engine.push(V[k], out=self._S[k]), ch.engine.start_weight(n), ch.v0, ch.dknown,
                      ch.static, ch.pre, ch.K) for k, ch in zip(("II", "III"), chans)]
-            HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"])
+            HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"],
+                               H=(chans[0].H, chans[1].H))  # H of the last step is rewritten in place
             if HH is not None:
                 chans[0].H, chans[1].H = HH
                 F1, F3 = self._rot["join"]
