@@ -170,19 +170,30 @@ def compiled() -> bool:
     return _compiled("rotate") is not None
 
 
+def _flat_strength(strength, shape):
+    """(flat strength, is scalar): one value, or the field broadcast to ``shape``."""
+    S = np.asarray(strength, dtype=float)
+    if S.size == 1:
+        return S.reshape(1), True
+    return np.ascontiguousarray(np.broadcast_to(S, shape)).ravel(), False
+
+
+def _flat_mask(mask, shape):
+    """(flat bool array, present) for an optional mask broadcast to ``shape``."""
+    if mask is None:
+        return np.zeros(1, bool), False
+    return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
+
+
 def shear_velocity(tau1, tau3, strength, eta, bonded=None):
     """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
     tau = tau* - eta v; returns (v1, v3, tau1, tau3). ``strength`` is an array of the
     grid's shape or a scalar. Needs numba (:func:`compiled`); without it
     :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
-    S = np.asarray(strength, dtype=float)
-    f = _compiled("shear")
-    scalar = S.size == 1
-    S = S.reshape(1) if scalar else np.ascontiguousarray(np.broadcast_to(S, tau1.shape)).ravel()
-    has_bonded = bonded is not None
-    b = np.ascontiguousarray(np.broadcast_to(bonded, tau1.shape)).ravel() if has_bonded else np.zeros(1, bool)
+    S, scalar = _flat_strength(strength, tau1.shape)
+    b, has_bonded = _flat_mask(bonded, tau1.shape)
     out = [np.empty(tau1.shape) for _ in range(4)]
-    f(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(), S, scalar,
+    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(), S, scalar,
       float(eta), b, has_bonded, *(o.ravel() for o in out))
     return tuple(out)
 
@@ -202,21 +213,12 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
     return H, F
 
 
-def _flat_mask(mask, shape):
-    """(flat bool array, present) for an optional mask broadcast to ``shape``."""
-    if mask is None:
-        return np.zeros(1, bool), False
-    return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
-
-
 def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None):
     """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
     (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
     0 where ``bonded``; tau = tau* - eta v.  Returns (v, tau), the same numbers as the
     numpy expressions of :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
-    S = np.asarray(strength, dtype=float)
-    scalar = S.size == 1
-    S = S.reshape(1) if scalar else np.ascontiguousarray(np.broadcast_to(S, tau2.shape)).ravel()
+    S, scalar = _flat_strength(strength, tau2.shape)
     all_broken = broken is True
     b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
     bd, has_bonded = _flat_mask(bonded, tau2.shape)
@@ -277,11 +279,6 @@ def plus_product(H, K, V, out=None):
     return out
 
 
-def _fusable(*arrays):
-    shape = arrays[0].shape
-    return all(isinstance(a, np.ndarray) and a.shape == shape and a.flags.c_contiguous for a in arrays)
-
-
 def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out):
     """Corrector for 3D shear in one pass: V = rotate(X1, X3) (Eq. 28), F = H + K V per
     channel, and F back to components, into ``out`` = (F1, F3); the same numbers as
@@ -289,7 +286,7 @@ def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out):
     None when the pass cannot run (no numba, or arrays it cannot take)."""
     f = _compiled("shear_correct")
     arrs = (c, s, X1, X3, H2, K2, H3, K3) + tuple(out)
-    if f is None or not _fusable(*arrs) or X1.dtype != complex or H2.dtype != complex or out[0].dtype != complex:
+    if f is None or not _same(*arrs) or X1.dtype != complex or H2.dtype != complex or out[0].dtype != complex:
         return None
     f(*(a.ravel() for a in arrs))
     return out
@@ -307,7 +304,7 @@ def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None)):
     chans = [[np.ascontiguousarray(np.broadcast_to(a, shape)) if i >= 5 else a for i, a in enumerate(ch)]
              for ch in (ch2, ch3)]
     arrs = [c, s, *chans[0], *chans[1], *out]
-    if not _fusable(*arrs) or any(a.dtype != complex for a in (chans[0][0], chans[0][4], chans[1][4], out[0])):
+    if not _same(*arrs) or any(a.dtype != complex for a in (chans[0][0], chans[0][4], chans[1][4], out[0])):
         return None
     H2, H3 = (h if isinstance(h, np.ndarray) and h.shape == shape and h.dtype == complex and h.flags.c_contiguous
               else np.empty(shape, dtype=complex) for h in H)

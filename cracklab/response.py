@@ -169,7 +169,11 @@ class Response:
 
     def _inverse(self, F: dict) -> dict:
         """f_j of the channel spectra F (destroyed), in the work arrays of the response."""
-        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in self._join(F).items()}
+        return self._to_real(self._join(F))
+
+    def _to_real(self, F: dict) -> dict:
+        """f_j of the component spectra F (destroyed), in the work arrays of the response."""
+        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in F.items()}
 
     # -- public -----------------------------------------------------------------------
     def predict(self, v_prev: dict) -> dict:
@@ -194,8 +198,7 @@ class Response:
                                H=(chans[0].H, chans[1].H))  # H of the last step is rewritten in place
             if HH is not None:
                 chans[0].H, chans[1].H = HH
-                F1, F3 = self._rot["join"]
-                return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in ((1, F1), (3, F3))}
+                return self._to_real(dict(zip((1, 3), self._rot["join"])))
             # not fusable: the same step channel by channel (the engines were pushed above)
             for (Vk, Sk, e0, v0, dk, st, pre, K), k, ch in zip(args, ("II", "III"), chans):
                 ch.H, F[k] = product_predict(Vk, Sk, e0, v0, dk, st, pre, K, self.dt)
@@ -221,7 +224,7 @@ class Response:
             II, III = self.channels["II"], self.channels["III"]
             out = shear_correct(self.c, self.s, X[1], X[3], II.H, II.K, III.H, III.K, self._rot["join"])
             if out is not None:
-                return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in zip((1, 3), out)}
+                return self._to_real(dict(zip((1, 3), out)))
             V = self._split(X, "V")
         else:
             V = self._forward(v_pred, "V")

@@ -6,6 +6,17 @@ import numpy as np
 from ..weights import convolution_weights
 
 
+def deliver(flat, shape, out=None, scale=None):
+    """An engine's S_n (flat, complex) times ``scale`` if given, as ``shape``: written into
+    ``out`` when given (push(x, out=, scale=) of every engine)."""
+    if scale is not None:
+        flat *= np.broadcast_to(scale, shape).reshape(-1)
+    if out is None:
+        return flat.reshape(shape)
+    out[...] = flat.reshape(shape)
+    return out
+
+
 class DirectEngine:
     """Direct evaluation of S_n = sum_j w_j x_{n-j}, O(n) work per mode and step.
 
@@ -90,13 +101,8 @@ class DirectEngine:
         self._buf[p + cap] = x
         hist = self._buf[p:p + length].view(float)       # newest first, (re, im) interleaved
         s = np.einsum("jm,jm->m", self._w2[:length], hist).view(complex)
-        if scale is not None:
-            s *= np.broadcast_to(scale, self.shape).reshape(-1)
         self.n = n + 1
-        if out is not None:
-            out[...] = s.reshape(self.shape)
-            return out
-        return s.reshape(self.shape)
+        return deliver(s, self.shape, out, scale)
 
     def get_state(self) -> dict:
         """The dynamic state: the step count and the stored history, newest first."""

@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import InputError
 from ..weights import FORMULATIONS, RULES, convolution_weights
 from . import tables
+from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
 
 __all__ = ["ExponentialEngine", "direct_taps"]
@@ -423,8 +424,8 @@ class ExponentialEngine:
             raise RuntimeError(f"the exponential engine was built for T <= {self.fit.T_end:g} "
                                f"({int(self._n_max)} steps); step {n} is beyond its fitted range")
         if self.backend == "numba":
-            res = out if out is not None and out.dtype == complex and out.flags.c_contiguous else None
-            flat = np.empty(x.size, dtype=complex) if res is None else res.reshape(-1)
+            into = out is not None and out.dtype == complex and out.flags.c_contiguous  # taps write into out
+            flat = out.reshape(-1) if into else np.empty(x.size, dtype=complex)
             _set_threads(self.threads)
             kern = _blocked()
             lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
@@ -435,12 +436,7 @@ class ExponentialEngine:
             kern.taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
                       _ONE if sc is None else sc.reshape(-1), sc is not None)
             self.n = n + 1
-            if res is not None:
-                return res
-            if out is not None:
-                out[...] = flat.reshape(self.shape)
-                return out
-            return flat.reshape(self.shape)
+            return out if into else deliver(flat, self.shape, out)
         xp, xin, S = self._xp, self._xin, self._S
         np.take(x, self._perm, out=xp)
         Sf = S.view(float)
@@ -458,13 +454,8 @@ class ExponentialEngine:
         Sf.reshape(m, 2)[...] += np.einsum("mkq,mq->mk", sig.view(float), self._ef)
         res = np.empty(m, dtype=complex)
         res[self._perm] = S
-        if scale is not None:
-            res *= np.broadcast_to(scale, self.shape).reshape(-1)
         self.n = n + 1
-        if out is not None:
-            out[...] = res.reshape(self.shape)
-            return out
-        return res.reshape(self.shape)
+        return deliver(res, self.shape, out, scale)
 
     def start_weight(self, n: int) -> np.ndarray:
         """E_0(n) of the product rule (the start-up term on x_0), for every mode (n >= lag).
