@@ -14,7 +14,7 @@ from .record import Record
 from .scene import Numerics, Scene
 from .spectral import Transforms, backend_name
 from .stability import beta_max
-from .stepper import steps
+from .stepper import Stepper
 
 MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
 
@@ -48,7 +48,9 @@ def fft_pair_ms(grid, repeats=50, threads=1):
 def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None):
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
     durations = []
-    it = steps(scene)
+    stepper = Stepper(scene)
+    overlap = any(getattr(ch.engine, "overlap", False) for ch in stepper.response.channels.values())
+    it = iter(stepper)
     if progress:
         from tqdm.auto import tqdm
 
@@ -66,6 +68,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (n1 * n3),
         "threads": int(threads), "engine_threads": scene.numerics.history_threads,
+        "overlap": overlap,
         "fft_pair_ms": fft_pair_ms(grid, threads=threads),
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,

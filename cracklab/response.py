@@ -147,6 +147,12 @@ class Response:
             for k in ("v0", "dknown", "H"):
                 setattr(ch, k, None if cs[k] is None else np.array(cs[k]))
 
+    def _launch(self) -> None:
+        """Every channel is pushed for this step: let the engines advance their states on
+        their worker thread while the step goes on (ExponentialEngine.launch)."""
+        for ch in self.channels.values():
+            ch.engine.launch()
+
     # -- spectral helpers ------------------------------------------------------------
     def _split(self, X: dict, slot: str = "D") -> dict:
         return split_channels(X, self.channels, self.shear3d, self.c, self.s, self._rot.get(slot))
@@ -194,6 +200,7 @@ class Response:
             chans = [self.channels[k] for k in ("II", "III")]
             args = [(V[k], ch.engine.push(V[k], out=self._S[k]), ch.engine.start_weight(n), ch.v0, ch.dknown,
                      ch.static, ch.pre, ch.K) for k, ch in zip(("II", "III"), chans)]
+            self._launch()
             HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"],
                                H=(chans[0].H, chans[1].H))  # H of the last step is rewritten in place
             if HH is not None:
@@ -214,6 +221,7 @@ class Response:
                 ch.H, F[name] = product_predict(V[name], ch.engine.push(V[name], out=self._S[name]),
                                                 ch.engine.start_weight(n), ch.v0, ch.dknown, ch.static, ch.pre,
                                                 ch.K, self.dt)
+        self._launch()
         return self._inverse(F)
 
     def correct(self, v_pred: dict) -> dict:
@@ -255,5 +263,6 @@ class Response:
                     conv = ch.engine.push(V[name]) - 0.5 * ch.engine.weight(n - 1) * ch.v0
                     Fn = Fn + ch.pre * conv
                 F[name] = Fn
+        self._launch()
         self.n = n + 1
         return self._inverse(F)

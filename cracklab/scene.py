@@ -47,7 +47,10 @@ class Numerics:
     T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
     its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
     the exponential engine's loop unless ``engine_threads`` is given (the two scale
-    differently: docs/performance.md)."""
+    differently: docs/performance.md). With two or more engine threads the exponential
+    engine advances its recursive states on a thread of its own while the transforms and
+    the interface law run; on two cores ``fft_threads=1, engine_threads=2`` is the fastest
+    (docs/performance.md)."""
 
     formulation: str = "auto"
     engine: str = "auto"

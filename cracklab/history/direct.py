@@ -104,6 +104,9 @@ class DirectEngine:
         self.n = n + 1
         return deliver(s, self.shape, out, scale)
 
+    def launch(self) -> None:
+        """Nothing to start: the direct engine does all its work in push (see ExponentialEngine.launch)."""
+
     def get_state(self) -> dict:
         """The dynamic state: the step count and the stored history, newest first."""
         length = self.n if self.cap is None else min(self.n, self.cap)

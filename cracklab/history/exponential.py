@@ -25,7 +25,10 @@ Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the compiled loops o
 of a mode can be advanced 8 steps at a time from inputs already in its ring (one eighth
 of the modes per step, staggered), their tail sums kept for the next 8 steps; "numpy"
 runs the per-step recursion vectorised over the modes.  Both give the same sums to
-round-off (docs/fast_engine.md).  The product
+round-off (docs/fast_engine.md).  The numba backend with two or more threads overlaps:
+push leaves the next step's advance due, :meth:`ExponentialEngine.launch` starts it on a
+worker thread, and the caller's transforms and interface law run meanwhile (the next push
+waits for it; the same numbers to the bit, ``CRACKLAB_OVERLAP=0`` switches it off).  The product
 rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted beyond.
 
 Memory per mode is fixed at construction (2 P complex states, Jd >= 8 buffered values and
@@ -173,6 +176,21 @@ def _set_threads(threads):
 
 _BLOCKED = None
 _ONE = np.ones(1)
+_POOL = None
+
+
+def _overlap_env():
+    return os.environ.get("CRACKLAB_OVERLAP", "1") != "0"
+
+
+def _worker():
+    """The process's history worker thread (one; recreated in a forked child)."""
+    global _POOL
+    if _POOL is None or _POOL[0] != os.getpid():
+        from concurrent.futures import ThreadPoolExecutor
+
+        _POOL = (os.getpid(), ThreadPoolExecutor(max_workers=1, thread_name_prefix="cracklab-history"))
+    return _POOL[1]
 
 
 def _blocked():
@@ -238,6 +256,11 @@ class ExponentialEngine:
         self.backend = _backend_choice()
         self.threads = int(threads or 1)
         self.n = 0
+        # two or more threads: the states are advanced on a worker thread while the caller
+        # goes on (transforms, interface law) between pushes
+        self.overlap = self.backend == "numba" and self.threads >= 2 and _overlap_env()
+        self._pending = None  # the worker's advance (a Future)
+        self._due = None      # the step whose advance push left for launch()
 
         ug, inv = np.unique(self.gamma, return_inverse=True)
         self._ug, self._inv = ug, inv
@@ -375,6 +398,7 @@ class ExponentialEngine:
 
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
+            self._join()
             out = {"ring": self._ring, "F": self._F}
             out.update({f"s{k}": a for k, a in enumerate(self._states)})
             return out
@@ -385,7 +409,36 @@ class ExponentialEngine:
 
     @property
     def _layout(self) -> str:
-        return "numba-blocked" if self.backend == "numba" else self.backend
+        return "numba-blocked-ahead" if self.backend == "numba" else self.backend
+
+    def _advance(self, n, threads):
+        """Advance the states of eighth n mod 8 through steps n .. n + 7 (blocked.advance)."""
+        lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+        if hi > lo:
+            _set_threads(threads)
+            _blocked().advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
+                               self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+
+    def launch(self) -> None:
+        """Start the advance the last push left due on the worker thread (``overlap``).
+
+        The caller pushes every channel of a step first, then launches, then does the work
+        that does not touch the engine (transforms, interface law) while the states advance;
+        the next push (or get_state) waits for them.  A no-op when nothing is due.
+        """
+        if self._due is not None and self._pending is None:
+            self._pending = _worker().submit(self._advance, self._due, 1)
+            self._due = None
+
+    def _join(self):
+        """Finish the advance due after the last push: wait for the worker (re-raising its
+        error), or run it here if it was never launched."""
+        pending, self._pending = self._pending, None
+        if pending is not None:
+            pending.result()
+        if self._due is not None:
+            due, self._due = self._due, None
+            self._advance(due, self.threads)
 
     _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n")
 
@@ -426,16 +479,18 @@ class ExponentialEngine:
         if self.backend == "numba":
             into = out is not None and out.dtype == complex and out.flags.c_contiguous  # taps write into out
             flat = out.reshape(-1) if into else np.empty(x.size, dtype=complex)
+            self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
-            kern = _blocked()
-            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
-            if hi > lo:
-                kern.advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
-                             self._rr, self._ri, self._er, self._ei, *self._states, self._F)
             sc = None if scale is None else np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float)
-            kern.taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
-                      _ONE if sc is None else sc.reshape(-1), sc is not None)
+            _blocked().taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
+                            _ONE if sc is None else sc.reshape(-1), sc is not None)
             self.n = n + 1
+            # the next step's eighth is advanced from the ring that now ends with x_n: here, or
+            # (overlap) on the worker thread from launch() while the caller goes on
+            if self.overlap:
+                self._due = n + 1
+            else:
+                self._advance(n + 1, self.threads)
             return out if into else deliver(flat, self.shape, out)
         xp, xin, S = self._xp, self._xin, self._S
         np.take(x, self._perm, out=xp)

@@ -1,0 +1,144 @@
+"""The exponential engine's overlap: with two or more engine threads the recursive states are
+advanced on a worker thread while the step goes on (ExponentialEngine.launch).  The sums,
+the runs and the checkpoints are those of the engine that advances in push, to the bit."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from cracklab.history import exponential as X
+
+pytest.importorskip("numba")
+
+
+def _engine(threads, **kw):
+    g = np.linspace(0.0, 1.6, 77).reshape(7, 11)
+    return X.ExponentialEngine(kernel=kw.pop("kernel", "I"), gamma=g, nu=0.25, threads=threads, nsteps=300, **kw)
+
+
+@pytest.mark.parametrize("launch_every", [1, 3])
+def test_overlapped_sums_are_the_sums_of_push(launch_every):
+    """Pushes with the advance on the worker (launched after every push, or only now and
+    then: an advance never launched runs at the next push) give the same S_n, bit for bit,
+    as the engine that advances in push; and the worker did the work."""
+    if X._backend_choice() != "numba":
+        pytest.skip("the overlap is a feature of the numba backend")
+    ref, ov = _engine(1), _engine(2)
+    assert ov.overlap and not ref.overlap
+    rng = np.random.default_rng(4)
+    launched = 0
+    for n in range(120):
+        x = rng.standard_normal(ref.shape) + 1j * rng.standard_normal(ref.shape)
+        a, b = ref.push(x), ov.push(x)
+        assert np.array_equal(a, b), n
+        if n % launch_every == 0:
+            ov.launch()
+            launched += ov._pending is not None
+    assert launched >= 120 // launch_every - 1
+    # the state saved by either is the same (the worker's advance is finished first)
+    sa, sb = ref.get_state(), ov.get_state()
+    for k in sa:
+        if isinstance(sa[k], np.ndarray):
+            assert np.array_equal(sa[k], sb[k]), k
+
+
+def test_a_worker_error_reaches_the_caller(monkeypatch):
+    """An error inside the worker's advance is raised by the next push, not lost."""
+    if X._backend_choice() != "numba":
+        pytest.skip("the overlap is a feature of the numba backend")
+    eng = _engine(2)
+    x = np.ones(eng.shape, dtype=complex)
+    eng.push(x)
+
+    def boom(self, n, threads):
+        raise FloatingPointError(f"advance of step {n} failed")
+
+    monkeypatch.setattr(X.ExponentialEngine, "_advance", boom)
+    eng.launch()
+    with pytest.raises(FloatingPointError, match="advance of step 1 failed"):
+        eng.push(x)
+
+
+def test_worker_is_per_process(monkeypatch):
+    """A forked child does not reuse its parent's worker thread (it does not exist there)."""
+    first = X._worker()
+    assert X._worker() is first
+    monkeypatch.setattr(X, "_POOL", (-1, first))  # as seen from another process
+    other = X._worker()
+    assert other is not first
+    assert other.submit(lambda: 6 * 7).result() == 42
+
+
+def _scenes():
+    from cracklab import (Grid, LinearCohesive, Loading, Material, Numerics, Record, Scene, SlipWeakening)
+
+    g = Grid(n1=32, n3=16, L1=2.0, L3=1.0)
+    x1, x3 = np.meshgrid(g.x1, g.x3, indexing="ij")
+    crack = (np.abs(x1 - 1.0) < 0.25) & (np.abs(x3 - 0.5) < 0.2)
+    num = Numerics(engine="exponential", fft_threads=1, engine_threads=2)
+    mode_i = Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=g,
+                   law=LinearCohesive(tau_c=1.0, delta_c=0.02, initial_crack=crack),
+                   loading=Loading(tau0_2=np.where(crack, 0.9, 0.6) * np.cos(3 * x3)), t_end=0.8, beta=0.2,
+                   record=Record(fields=("delta_2",), every=8), numerics=num)
+    bonded = (np.abs(x1 - 1.0) > 0.8) | (np.abs(x3 - 0.5) > 0.4)
+    shear = Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=g,
+                  law=SlipWeakening(mu_s=0.6, mu_d=0.5, D_c=0.01, sigma_n=1.0, bonded=bonded),
+                  loading=Loading(tau0_1=np.where(crack, 0.62, 0.55)), t_end=0.6, beta=0.2,
+                  record=Record(fields=("delta_1", "delta_3"), every=10), numerics=num)
+    return {"I": mode_i, "shear": shear}
+
+
+@pytest.mark.parametrize("case", ["I", "shear"])
+def test_overlapped_runs_are_the_runs_without(case, monkeypatch):
+    """Mode I (displacement scheme) and 3D shear (product scheme) with two engine threads:
+    the run with the advance on the worker and the run with it in push agree to the bit,
+    and a checkpoint taken from the one continues in the other."""
+    if X._backend_choice() != "numba":
+        pytest.skip("the overlap is a feature of the numba backend")
+    from cracklab import simulate
+    from cracklab.stepper import Stepper
+
+    sc = _scenes()[case]
+    fields = list(sc.record.fields)
+    submitted = []
+    real = X._worker
+
+    def counting():
+        submitted.append(1)
+        return real()
+
+    monkeypatch.setattr(X, "_worker", counting)
+    over = simulate(sc)
+    assert len(submitted) > sc.nsteps  # every step (each channel) was advanced on the worker
+    monkeypatch.setenv("CRACKLAB_OVERLAP", "0")
+    plain = simulate(sc)
+    assert float(np.abs(over[fields[0]]).max()) > 0
+    for f in fields:
+        assert np.array_equal(over[f].values, plain[f].values), f
+
+    # a checkpoint of the overlapped run, continued without the overlap (and the reverse)
+    monkeypatch.delenv("CRACKLAB_OVERLAP")
+    a = Stepper(sc)
+    it = iter(a)
+    for _ in range(25):
+        next(it)
+    state = a.get_state()
+    ref = [{c: d.copy() for c, d in next(it).delta.items()} for _ in range(10)]
+    monkeypatch.setenv("CRACKLAB_OVERLAP", "0")
+    b = Stepper(sc, start=state)
+    assert not any(ch.engine.overlap for ch in b.response.channels.values())
+    it_b = iter(b)
+    for r in ref:
+        g = next(it_b).delta
+        for c in r:
+            assert np.array_equal(r[c], g[c])
+    state = b.get_state()
+    ref = [{c: d.copy() for c, d in next(it_b).delta.items()} for _ in range(10)]
+    monkeypatch.delenv("CRACKLAB_OVERLAP")
+    c3 = Stepper(sc, start=state)
+    assert all(ch.engine.overlap for ch in c3.response.channels.values())
+    it_c = iter(c3)
+    for r in ref:
+        g = next(it_c).delta
+        for c in r:
+            assert np.array_equal(r[c], g[c])
