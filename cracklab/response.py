@@ -118,6 +118,8 @@ class Response:
         self._f = {c: fft.empty(spectral=False) for c in self.components}
         # 3D shear: the rotated II/III spectra of each forward slot, and of the way back
         self._rot = {k: (fft.empty(), fft.empty()) for k in ("D", "V", "join")} if self.shear3d else {}
+        # displacement formulation: the engines apply pre / N (no pass for the 1/N after the inverse)
+        self._pre_n = {name: ch.pre * fft.norm for name, ch in self.channels.items()}
         self.n = 0
 
     @classmethod
@@ -173,13 +175,14 @@ class Response:
     def _forward(self, fields: dict, slot: str = "D") -> dict:
         return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components}, slot)
 
-    def _inverse(self, F: dict) -> dict:
-        """f_j of the channel spectra F (destroyed), in the work arrays of the response."""
-        return self._to_real(self._join(F))
+    def _inverse(self, F: dict, prescaled: bool = False) -> dict:
+        """f_j of the channel spectra F (destroyed), in the work arrays of the response
+        (``prescaled``: F carries the 1/N of the inverse transform)."""
+        return self._to_real(self._join(F), prescaled)
 
-    def _to_real(self, F: dict) -> dict:
+    def _to_real(self, F: dict, prescaled: bool = False) -> dict:
         """f_j of the component spectra F (destroyed), in the work arrays of the response."""
-        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True) for c, Fc in F.items()}
+        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True, prescaled=prescaled) for c, Fc in F.items()}
 
     # -- public -----------------------------------------------------------------------
     def predict(self, v_prev: dict) -> dict:
@@ -251,18 +254,20 @@ class Response:
         D = self._forward(delta)
         F = {}
         if self.formulation == "displacement":
-            for name, ch in self.channels.items():
-                F[name] = ch.engine.push(D[name], out=self._S[name], scale=ch.pre)
-        else:
-            V = self._forward(v_prev, "V") if n > 0 else None
-            for name, ch in self.channels.items():
-                Fn = ch.static * D[name]
-                if n > 0:
-                    if n == 1:
-                        ch.v0 = V[name].copy()
-                    conv = ch.engine.push(V[name]) - 0.5 * ch.engine.weight(n - 1) * ch.v0
-                    Fn = Fn + ch.pre * conv
-                F[name] = Fn
+            for name, ch in self.channels.items():  # the prefactor with the 1/N of the inverse FFT
+                F[name] = ch.engine.push(D[name], out=self._S[name], scale=self._pre_n[name])
+            self._launch()
+            self.n = n + 1
+            return self._inverse(F, prescaled=True)
+        V = self._forward(v_prev, "V") if n > 0 else None
+        for name, ch in self.channels.items():
+            Fn = ch.static * D[name]
+            if n > 0:
+                if n == 1:
+                    ch.v0 = V[name].copy()
+                conv = ch.engine.push(V[name]) - 0.5 * ch.engine.weight(n - 1) * ch.v0
+                Fn = Fn + ch.pre * conv
+            F[name] = Fn
         self._launch()
         self.n = n + 1
         return self._inverse(F)

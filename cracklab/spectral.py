@@ -79,6 +79,8 @@ class Transforms:
         self.backend = backend or backend_name()
         self.spectral_shape = grid.spectral_shape
         self._scale = 1.0 / (self.shape[0] * self.shape[1])
+        #: 1/N, the factor of the inverse transform (see ``inverse(prescaled=True)``)
+        self.norm = self._scale
         if self.backend == "pyfftw":
             self._plan()
 
@@ -113,12 +115,18 @@ class Transforms:
         """Spectrum of the real field x: a new array, or written into ``out`` (spectral shape)."""
         if self.backend == "pyfftw":
             fwd = self._fwd
-            fwd.input_array[...] = x[:, 0] if self.plane else x
+            src = x[:, 0] if self.plane else x
             if out is None:
+                fwd.input_array[...] = src
                 fwd.execute()
                 res = fwd.output_array.copy()
                 return res[:, None] if self.plane else res
-            self._execute_into(fwd, fwd.input_array, out)
+            # a real-to-complex plan leaves its input alone: run it from x itself when it can
+            if not (src.dtype == np.float64 and src.flags.c_contiguous and src.shape == fwd.input_array.shape
+                    and pyfftw.is_byte_aligned(src, fwd.input_alignment)):
+                fwd.input_array[...] = src
+                src = fwd.input_array
+            self._execute_into(fwd, src, out)
             return out
         if self.plane:
             res = sfft.rfft(x[:, 0], workers=self.workers)[:, None]
@@ -129,9 +137,11 @@ class Transforms:
         out[...] = res
         return out
 
-    def inverse(self, X: np.ndarray, out: np.ndarray | None = None, overwrite: bool = False) -> np.ndarray:
+    def inverse(self, X: np.ndarray, out: np.ndarray | None = None, overwrite: bool = False,
+                prescaled: bool = False) -> np.ndarray:
         """Real field of the spectrum X (normalised by 1/N like scipy's inverse): a new array,
-        or written into ``out``; ``overwrite=True`` lets the transform destroy X (no copy in)."""
+        or written into ``out``; ``overwrite=True`` lets the transform destroy X (no copy in);
+        ``prescaled=True``: X already carries the factor :attr:`norm` = 1/N (no pass for it)."""
         if self.backend == "pyfftw":
             inv = self._inv
             src = X[:, 0] if self.plane else X
@@ -141,15 +151,17 @@ class Transforms:
                 src = inv.input_array
             if out is None:
                 inv.execute()
-                res = inv.output_array * self._scale
+                res = inv.output_array.copy() if prescaled else inv.output_array * self._scale
                 return res[:, None] if self.plane else res
             self._execute_into(inv, src, out)
-            np.multiply(out, self._scale, out=out)
+            if not prescaled:
+                np.multiply(out, self._scale, out=out)
             return out
+        norm = "forward" if prescaled else "backward"
         if self.plane:
-            res = sfft.irfft(X[:, 0], n=self.shape[0], workers=self.workers)[:, None]
+            res = sfft.irfft(X[:, 0], n=self.shape[0], workers=self.workers, norm=norm)[:, None]
         else:
-            res = sfft.irfftn(X, s=self.shape, axes=(0, 1), workers=self.workers)
+            res = sfft.irfftn(X, s=self.shape, axes=(0, 1), workers=self.workers, norm=norm)
         if out is None:
             return res
         out[...] = res

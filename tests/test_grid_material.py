@@ -111,6 +111,15 @@ def test_transforms_into_work_arrays(backend, shape, tmp_path, monkeypatch):
     f.inverse(Yo, out=xo, overwrite=True)
     np.testing.assert_allclose(xo, y, atol=1e-12)
     assert np.array_equal(xo, f.inverse(Y))
+    # an aligned input is transformed in place of a copy, and left as it was
+    xa = f.empty(spectral=False)
+    xa[...] = x
+    assert np.array_equal(f.forward(xa, out=Xo), X) and np.array_equal(xa, x)
+    # prescaled: the spectrum carries the 1/N, the inverse skips its pass for it
+    assert f.norm == pytest.approx(1.0 / (shape[0] * shape[1]))
+    f.inverse(X * f.norm, out=xo, prescaled=True)
+    np.testing.assert_allclose(xo, x, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(f.inverse(X * f.norm, prescaled=True), x, rtol=0, atol=1e-13)
     with pytest.raises(ValueError, match="shape"):
         f.forward(x, out=np.empty((3, 3), dtype=complex)) if backend == "pyfftw" else (_ for _ in ()).throw(
             ValueError("shape"))

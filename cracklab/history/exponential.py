@@ -261,6 +261,7 @@ class ExponentialEngine:
         self.overlap = self.backend == "numba" and self.threads >= 2 and _overlap_env()
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
+        self._scale_src = self._scale_flat = None
 
         ug, inv = np.unique(self.gamma, return_inverse=True)
         self._ug, self._inv = ug, inv
@@ -419,6 +420,15 @@ class ExponentialEngine:
             _blocked().advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
                                self._rr, self._ri, self._er, self._ei, *self._states, self._F)
 
+    def _scale_for(self, scale):
+        """``scale`` flat and contiguous (kept for the next push with the same array)."""
+        if scale is None:
+            return None
+        if scale is not self._scale_src:
+            self._scale_src = scale
+            self._scale_flat = np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float).reshape(-1)
+        return self._scale_flat
+
     def launch(self) -> None:
         """Start the advance the last push left due on the worker thread (``overlap``).
 
@@ -481,9 +491,9 @@ class ExponentialEngine:
             flat = out.reshape(-1) if into else np.empty(x.size, dtype=complex)
             self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
-            sc = None if scale is None else np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float)
+            sc = self._scale_for(scale)
             _blocked().taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
-                            _ONE if sc is None else sc.reshape(-1), sc is not None)
+                            _ONE if sc is None else sc, sc is not None)
             self.n = n + 1
             # the next step's eighth is advanced from the ring that now ends with x_n: here, or
             # (overlap) on the worker thread from launch() while the caller goes on
