@@ -1,21 +1,25 @@
 """The exponential engine's compiled step: the recursive states advanced eight steps at a time.
 
 :class:`cracklab.history.exponential.ExponentialEngine` keeps, per mode, the last Jd >= 8
-inputs in a ring (the direct taps) and, per term p, the states s_p of Re x and Im x
+inputs (the direct taps) and, per term p, the states s_p of Re x and Im x
 (``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, tail sum ``Re sum_p e_p s_p``).  Because the
 input that enters the states at step n is Jd >= 8 steps old, the states of a mode can be
-advanced through the next :data:`BLOCK` steps at once, from inputs already in its ring:
+advanced through the next :data:`BLOCK` steps at once, from inputs already kept:
 :func:`advance` does so for one eighth of the modes at every step (eighth n mod 8 of
-the natural mode order at step n, each eighth sorted by gamma so that the coefficient
-rows are read in order), keeping the states in registers for the eight steps and storing
-the eight tail sums in ``F``; :func:`taps` then, for every mode in its natural
-order, shifts x_n into the ring and returns ``S_n = sum_j w_j x_{n-j}`` (j < Jd) plus
-the tail sum of step n.
-The sums are those of the per-step recursion, reordered (fast-math); the states and the
-coefficient tables are read once per eight steps instead of every step, and no loop
-makes array views (each view costs reference counting per mode).  The taps sweep reads
-only sequential streams (rings, per-mode weights, F): a table lookup per mode cost more
-than the arithmetic.
+the natural mode order, sorted by gamma so that the coefficient rows are read in order),
+keeping the states in registers for the eight steps and storing the eight tail sums in
+``F``; :func:`taps` then returns ``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the tail sum of
+step n for every mode, and :func:`taps_long` adds the taps j >= 8 of the modes that have
+more (small gamma).
+
+Layout.  The last 8 inputs of every mode are kept slot by slot over the modes ("tap
+major"): ``R[k % 8, m] = x_k``, with the weights ``W[j, m] = w_j`` and the tail sums
+``F[(n + r) % 8, m]``, so that :func:`taps` reads and writes only whole rows in the modes'
+natural order (16 B per mode and row; a ring per mode spans two cache lines that are
+both read and written back).  Modes with Jd > 8 also keep all Jd inputs in a circular
+ring of their own (``L``, x_k in slot k mod Jd), which :func:`advance` reads for their
+states' inputs.
+The sums are those of the per-step recursion, reordered (fast-math).
 
 The eight steps of :func:`advance` are written out: the term loop then vectorises with
 the sixteen partial sums in registers (a loop over the steps inside it does not).
@@ -33,14 +37,14 @@ if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def advance(n, lo, hi, order, us, start, jd_u, ring, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
-    """Advance the states of sorted positions lo..hi-1 through steps n..n+7; F[m, (n+j) % 8] =
+def advance(n, lo, hi, order, us, lstart, jd_u, R, L, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
+    """Advance the states of sorted positions lo..hi-1 through steps n..n+7; F[(n+j) % 8, m] =
     tail sum of step n+j for their modes m = order[i].
 
-    Inputs: x_{n+j-Jd} = ring[start + j] (the ring holds x_{n-Jd} .. x_{n-1} oldest first,
-    real parts then imaginary parts at +Jd; ``start`` per sorted position), read before step
-    n shifts x_n in.  RR/RI: rho_p, ER/EI: e_p per unique gamma (rows ``us``); the states
-    Ar..Bi per sorted position.
+    Inputs x_{n+j-Jd}, j < 8, as kept after step n - 1: for Jd = 8, R[(n + j) % 8, m]; for
+    Jd > 8, slot (n + j) mod Jd of the mode's circular ring in L (real parts, then imaginary
+    parts at +Jd; ``lstart`` per sorted position).  RR/RI: rho_p, ER/EI:
+    e_p per unique gamma (rows ``us``); the states Ar..Bi per sorted position.
     """
     P = RR.shape[1]
     nc = 16
@@ -49,23 +53,34 @@ def advance(n, lo, hi, order, us, start, jd_u, ring, RR, RI, ER, EI, Ar, Ai, Br,
             u = us[i]
             m = order[i]
             J = jd_u[u]
-            b0 = start[i]
-            x0r = ring[b0 + 0]
-            x0i = ring[b0 + J + 0]
-            x1r = ring[b0 + 1]
-            x1i = ring[b0 + J + 1]
-            x2r = ring[b0 + 2]
-            x2i = ring[b0 + J + 2]
-            x3r = ring[b0 + 3]
-            x3i = ring[b0 + J + 3]
-            x4r = ring[b0 + 4]
-            x4i = ring[b0 + J + 4]
-            x5r = ring[b0 + 5]
-            x5i = ring[b0 + J + 5]
-            x6r = ring[b0 + 6]
-            x6i = ring[b0 + J + 6]
-            x7r = ring[b0 + 7]
-            x7i = ring[b0 + J + 7]
+            if J == 8:
+                k = n & 7
+                v = R[k, m]; x0r = v.real; x0i = v.imag
+                v = R[(k + 1) & 7, m]; x1r = v.real; x1i = v.imag
+                v = R[(k + 2) & 7, m]; x2r = v.real; x2i = v.imag
+                v = R[(k + 3) & 7, m]; x3r = v.real; x3i = v.imag
+                v = R[(k + 4) & 7, m]; x4r = v.real; x4i = v.imag
+                v = R[(k + 5) & 7, m]; x5r = v.real; x5i = v.imag
+                v = R[(k + 6) & 7, m]; x6r = v.real; x6i = v.imag
+                v = R[(k + 7) & 7, m]; x7r = v.real; x7i = v.imag
+            else:
+                b0 = lstart[i]
+                k = n % J
+                x0r = L[b0 + k]; x0i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x1r = L[b0 + k]; x1i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x2r = L[b0 + k]; x2i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x3r = L[b0 + k]; x3i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x4r = L[b0 + k]; x4i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x5r = L[b0 + k]; x5i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x6r = L[b0 + k]; x6i = L[b0 + J + k]
+                k = k + 1 if k + 1 < J else 0
+                x7r = L[b0 + k]; x7i = L[b0 + J + k]
             f0r = 0.0; f1r = 0.0; f2r = 0.0; f3r = 0.0; f4r = 0.0; f5r = 0.0; f6r = 0.0; f7r = 0.0
             f0i = 0.0; f1i = 0.0; f2i = 0.0; f3i = 0.0; f4i = 0.0; f5i = 0.0; f6i = 0.0; f7i = 0.0
             for q in range(P):
@@ -161,61 +176,62 @@ def advance(n, lo, hi, order, us, start, jd_u, ring, RR, RI, ER, EI, Ar, Ai, Br,
                 Ai[i, q] = ai
                 Br[i, q] = br
                 Bi[i, q] = bi
-            F[m, (n + 0) % 8] = complex(f0r, f0i)
-            F[m, (n + 1) % 8] = complex(f1r, f1i)
-            F[m, (n + 2) % 8] = complex(f2r, f2i)
-            F[m, (n + 3) % 8] = complex(f3r, f3i)
-            F[m, (n + 4) % 8] = complex(f4r, f4i)
-            F[m, (n + 5) % 8] = complex(f5r, f5i)
-            F[m, (n + 6) % 8] = complex(f6r, f6i)
-            F[m, (n + 7) % 8] = complex(f7r, f7i)
+            F[(n + 0) & 7, m] = complex(f0r, f0i)
+            F[(n + 1) & 7, m] = complex(f1r, f1i)
+            F[(n + 2) & 7, m] = complex(f2r, f2i)
+            F[(n + 3) & 7, m] = complex(f3r, f3i)
+            F[(n + 4) & 7, m] = complex(f4r, f4i)
+            F[(n + 5) & 7, m] = complex(f5r, f5i)
+            F[(n + 6) & 7, m] = complex(f6r, f6i)
+            F[(n + 7) & 7, m] = complex(f7r, f7i)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps(x, n, inv, start, jd_u, w, ring, F, out, scale, scaled):
-    """Shift x_n into every ring and return out[m] = sum_{j < Jd} w_j x_{n-j} + F[m, n % 8]
-    (times scale[m] if ``scaled``).
-
-    Modes in their natural order: x, out, the rings, the weights and F are each read or
-    written in one sweep.  The ring of mode m (``start[m]``) holds the last Jd inputs
-    oldest first (real parts, then imaginary parts); ``w[start[m] // 2 + r]`` is the
-    weight of slot r once x_n is in (w_{Jd-1-r}).
-    """
+def taps(x, n, W, R, F, out, scale, scaled):
+    """out[m] = F[n % 8, m] + sum_{j < 8} W[j, m] x_{n-j} (times scale[m] if ``scaled``), and
+    R[n % 8, m] = x_n; x_{n-j} = R[(n - j) % 8, m].  Whole rows, natural mode order."""
     M = x.size
-    jrow = n % 8
+    k0 = n & 7
+    k1 = (n - 1) & 7
+    k2 = (n - 2) & 7
+    k3 = (n - 3) & 7
+    k4 = (n - 4) & 7
+    k5 = (n - 5) & 7
+    k6 = (n - 6) & 7
+    k7 = (n - 7) & 7
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
-            J = jd_u[inv[m]]
-            b0 = start[m]
-            w0 = b0 // 2
             v = x[m]
-            f = F[m, jrow]
-            accr = f.real + w[w0 + J - 1] * v.real
-            acci = f.imag + w[w0 + J - 1] * v.imag
-            if J == 8:  # most modes: written out
-                a1 = ring[b0 + 1]; a2 = ring[b0 + 2]; a3 = ring[b0 + 3]; a4 = ring[b0 + 4]
-                a5 = ring[b0 + 5]; a6 = ring[b0 + 6]; a7 = ring[b0 + 7]
-                i1 = ring[b0 + 9]; i2 = ring[b0 + 10]; i3 = ring[b0 + 11]; i4 = ring[b0 + 12]
-                i5 = ring[b0 + 13]; i6 = ring[b0 + 14]; i7 = ring[b0 + 15]
-                accr += (w[w0] * a1 + w[w0 + 1] * a2 + w[w0 + 2] * a3 + w[w0 + 3] * a4
-                         + w[w0 + 4] * a5 + w[w0 + 5] * a6 + w[w0 + 6] * a7)
-                acci += (w[w0] * i1 + w[w0 + 1] * i2 + w[w0 + 2] * i3 + w[w0 + 3] * i4
-                         + w[w0 + 4] * i5 + w[w0 + 5] * i6 + w[w0 + 6] * i7)
-                ring[b0] = a1; ring[b0 + 1] = a2; ring[b0 + 2] = a3; ring[b0 + 3] = a4
-                ring[b0 + 4] = a5; ring[b0 + 5] = a6; ring[b0 + 6] = a7; ring[b0 + 7] = v.real
-                ring[b0 + 8] = i1; ring[b0 + 9] = i2; ring[b0 + 10] = i3; ring[b0 + 11] = i4
-                ring[b0 + 12] = i5; ring[b0 + 13] = i6; ring[b0 + 14] = i7; ring[b0 + 15] = v.imag
-            else:
-                for r in range(J - 1):
-                    a = ring[b0 + r + 1]
-                    b = ring[b0 + J + r + 1]
-                    accr += w[w0 + r] * a
-                    acci += w[w0 + r] * b
-                    ring[b0 + r] = a
-                    ring[b0 + J + r] = b
-                ring[b0 + J - 1] = v.real
-                ring[b0 + 2 * J - 1] = v.imag
+            acc = (F[k0, m] + W[0, m] * v + W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m]
+                   + W[4, m] * R[k4, m] + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+            R[k0, m] = v
             if scaled:
-                accr *= scale[m]
-                acci *= scale[m]
-            out[m] = complex(accr, acci)
+                acc *= scale[m]
+            out[m] = acc
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
+def taps_long(x, n, modes, lstart, ljd, wl, L, out, scale, scaled):
+    """For the modes with Jd > 8: out[m] += sum_{8 <= j < Jd} w_j x_{n-j} (times scale[m] if
+    ``scaled``), and x_n into the mode's circular ring L (x_k in slot k mod Jd: real parts,
+    then imaginary parts at +Jd); ``wl[lstart // 2 + j]`` = w_j."""
+    for i in numba.prange(modes.size):
+        m = modes[i]
+        J = ljd[i]
+        b0 = lstart[i]
+        w0 = b0 // 2
+        k = (n - 8) % J
+        accr = 0.0
+        acci = 0.0
+        for j in range(8, J):  # x_{n-j} in slot (n - j) mod Jd, walking back from n - 8
+            accr += wl[w0 + j] * L[b0 + k]
+            acci += wl[w0 + j] * L[b0 + J + k]
+            k = k - 1 if k > 0 else J - 1
+        v = x[m]
+        k = n % J
+        L[b0 + k] = v.real
+        L[b0 + J + k] = v.imag
+        if scaled:
+            accr *= scale[m]
+            acci *= scale[m]
+        out[m] += complex(accr, acci)

@@ -347,42 +347,51 @@ class ExponentialEngine:
     def _setup_blocked(self, rho_u, e_u):
         """Tables and states of the compiled loops (blocked.py).
 
-        taps sweeps the modes in their natural order (rings and F by mode); advance works
-        through the modes sorted by gamma, one eighth per step (states by sorted position,
-        coefficient rows read in order)."""
+        taps sweeps the modes in their natural order over tap-major rows (the last 8 inputs
+        R, weights W, tail sums F: row j or slot k, then the mode); advance works through
+        the modes sorted by gamma, one eighth per step (states by sorted position,
+        coefficient rows read in order); modes with more than 8 taps keep a ring of their
+        own (L, circular) for taps_long and for their states' inputs."""
         m, jd_u, inv = self.gamma.size, self._jd_u, self._inv
-        self._inv_i = np.ascontiguousarray(inv, dtype=np.int64)
-        # advance's eighths are eighths of the natural order (rings and F read in one sweep),
-        # each sorted by gamma (coefficient rows read in order)
+        # advance's eighths are eighths of the natural order, each sorted by gamma
         order = np.lexsort((inv, np.arange(m) * _BLOCK // max(m, 1)))
         self._order, self._us = order.astype(np.int64), inv[order].astype(np.int64)
         self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
-        jd = jd_u[inv]
-        self._start = np.zeros(m, dtype=np.int64)  # ring of mode m: Jd real parts, then Jd imaginary parts
-        if m:
-            self._start[1:] = np.cumsum(2 * jd)[:-1]
-        self._start_sorted = np.ascontiguousarray(self._start[order])
         self._bounds = [m * g // _BLOCK for g in range(_BLOCK + 1)]
-        # tap weights by mode (blocked.taps): slot r of the ring (oldest first) gets w_{Jd-1-r}
-        w = np.empty(int(jd.sum()))
-        for J in np.unique(jd_u):
-            sel = np.flatnonzero(jd == J)
-            rows = self._wflat[self._wstart_u[inv[sel]][:, None] + np.arange(J)[None, ::-1]]
-            w[self._start[sel][:, None] // 2 + np.arange(J)[None, :]] = rows
-        self._wmode = w
+        jd = jd_u[inv]
+        # the exact weights w_0 .. w_7 of every mode, row by row
+        self._W = np.ascontiguousarray(self._wflat[self._wstart_u[inv][None, :] + np.arange(_BLOCK)[:, None]])
+        self._R = np.zeros((_BLOCK, m), dtype=complex)   # x_k in row k % 8
+        self._F = np.zeros((_BLOCK, m), dtype=complex)   # tail sum of step n in row n % 8
+        # modes with more taps: their own circular rings (x_k in slot k mod Jd; Jd real parts,
+        # then Jd imaginary parts) and weights
+        lm = np.flatnonzero(jd > _BLOCK).astype(np.int64)
+        ljd = np.ascontiguousarray(jd[lm], dtype=np.int64)
+        lstart = np.zeros(lm.size, dtype=np.int64)
+        if lm.size:
+            lstart[1:] = np.cumsum(2 * ljd)[:-1]
+        wl = np.empty(int(ljd.sum()))
+        for J in np.unique(ljd):
+            sel = np.flatnonzero(ljd == J)
+            wl[lstart[sel][:, None] // 2 + np.arange(J)[None, :]] = \
+                self._wflat[self._wstart_u[inv[lm[sel]]][:, None] + np.arange(J)[None, :]]
+        self._lmodes, self._ljd, self._lstart, self._wl = lm, ljd, lstart, wl
+        self._L = np.zeros(int(2 * ljd.sum()))
+        at = np.zeros(m, dtype=np.int64)
+        at[lm] = lstart
+        self._lstart_sorted = np.ascontiguousarray(at[order])
         self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
         self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
-        self._ring = np.zeros(int(2 * jd.sum()))
         self._states = [np.zeros((m, self.pairs)) for _ in range(4)]  # Re and Im of s_p for Re x, then Im x
-        self._F = np.zeros((m, _BLOCK), dtype=complex)  # tail sums of the next BLOCK steps, by mode
 
     # ------------------------------------------------------------------ public
     @property
     def nbytes(self) -> int:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
-            arrs = [self._ring, self._wflat, self._wmode, self._rr, self._ri, self._er, self._ei, self._F,
-                    self._order, self._us, self._inv_i, self._start, self._start_sorted, *self._states]
+            arrs = [self._R, self._W, self._L, self._wl, self._wflat, self._rr, self._ri, self._er, self._ei,
+                    self._F, self._order, self._us, self._lmodes, self._ljd, self._lstart, self._lstart_sorted,
+                    *self._states]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -392,7 +401,7 @@ class ExponentialEngine:
     def state_shapes(self) -> list:
         """Shapes of every state array (for checking that nothing grows with n)."""
         if self.backend == "numba":
-            arrs = [self._ring, self._rr, self._er, self._F, *self._states]
+            arrs = [self._R, self._L, self._rr, self._er, self._F, *self._states]
         else:
             arrs = [self._rho, self._ef, self._sig] + [g[3] for g in self._groups]
         return [a.shape for a in arrs]
@@ -400,7 +409,7 @@ class ExponentialEngine:
     def _state_arrays(self) -> dict:
         if self.backend == "numba":
             self._join()
-            out = {"ring": self._ring, "F": self._F}
+            out = {"R": self._R, "L": self._L, "F": self._F}
             out.update({f"s{k}": a for k, a in enumerate(self._states)})
             return out
         out = {"sig": self._sig}
@@ -410,15 +419,15 @@ class ExponentialEngine:
 
     @property
     def _layout(self) -> str:
-        return "numba-blocked-ahead" if self.backend == "numba" else self.backend
+        return "numba-tapmajor" if self.backend == "numba" else self.backend
 
     def _advance(self, n, threads):
         """Advance the states of eighth n mod 8 through steps n .. n + 7 (blocked.advance)."""
         lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
         if hi > lo:
             _set_threads(threads)
-            _blocked().advance(n, lo, hi, self._order, self._us, self._start_sorted, self._jd_u_i, self._ring,
-                               self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+            _blocked().advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
+                               self._L, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
 
     def _scale_for(self, scale):
         """``scale`` flat and contiguous (kept for the next push with the same array)."""
@@ -492,8 +501,11 @@ class ExponentialEngine:
             self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
             sc = self._scale_for(scale)
-            _blocked().taps(x, n, self._inv_i, self._start, self._jd_u_i, self._wmode, self._ring, self._F, flat,
-                            _ONE if sc is None else sc, sc is not None)
+            kern = _blocked()
+            kern.taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
+            if self._lmodes.size:
+                kern.taps_long(x, n, self._lmodes, self._lstart, self._ljd, self._wl, self._L, flat,
+                               _ONE if sc is None else sc, sc is not None)
             self.n = n + 1
             # the next step's eighth is advanced from the ring that now ends with x_n: here, or
             # (overlap) on the worker thread from launch() while the caller goes on
