@@ -8,17 +8,18 @@ advanced through the next :data:`BLOCK` steps at once, from inputs already kept:
 :func:`advance` does so for one eighth of the modes at every step (eighth n mod 8 of
 the natural mode order, sorted by gamma so that the coefficient rows are read in order),
 keeping the states in registers for the eight steps and storing the eight tail sums in
-``F``; :func:`taps` then returns ``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the tail sum of
-step n for every mode, and :func:`taps_long` adds the taps j >= 8 of the modes that have
-more (small gamma).
+``F``, and adds to them the taps j >= 8 of the modes that have more than 8 (small
+gamma: those inputs are older than x_n); :func:`taps` then returns
+``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step n for every mode.
 
 Layout.  The last 8 inputs of every mode are kept slot by slot over the modes ("tap
 major"): ``R[k % 8, m] = x_k``, with the weights ``W[j, m] = w_j`` and the tail sums
 ``F[(n + r) % 8, m]``, so that :func:`taps` reads and writes only whole rows in the modes'
 natural order (16 B per mode and row; a ring per mode spans two cache lines that are
-both read and written back).  Modes with Jd > 8 also keep all Jd inputs in a circular
-ring of their own (``L``, x_k in slot k mod Jd), which :func:`advance` reads for their
-states' inputs.
+both read and written back).  Modes with Jd > 8 also keep their inputs in a circular
+ring of their own (``L``, x_k in slot k mod Jd), which :func:`advance` fills from the rows
+(the 8 inputs since its last visit) and then reads for the states' inputs and the taps
+j >= 8.
 The sums are those of the per-step recursion, reordered (fast-math).
 
 The eight steps of :func:`advance` are written out: the term loop then vectorises with
@@ -37,13 +38,15 @@ if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def advance(n, lo, hi, order, us, lstart, jd_u, R, L, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
+def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
     """Advance the states of sorted positions lo..hi-1 through steps n..n+7; F[(n+j) % 8, m] =
-    tail sum of step n+j for their modes m = order[i].
+    tail sum of step n+j for their modes m = order[i] (plus, for Jd > 8, the taps
+    sum_{8 <= k < Jd} w_k x_{n+j-k}, ``wl[lstart // 2 + k]`` = w_k).
 
     Inputs x_{n+j-Jd}, j < 8, as kept after step n - 1: for Jd = 8, R[(n + j) % 8, m]; for
     Jd > 8, slot (n + j) mod Jd of the mode's circular ring in L (real parts, then imaginary
-    parts at +Jd; ``lstart`` per sorted position).  RR/RI: rho_p, ER/EI:
+    parts at +Jd; ``lstart`` per sorted position), which first takes x_{n-8} .. x_{n-1}
+    from the rows.  RR/RI: rho_p, ER/EI:
     e_p per unique gamma (rows ``us``); the states Ar..Bi per sorted position.
     """
     P = RR.shape[1]
@@ -65,6 +68,12 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, RR, RI, ER, EI, Ar, Ai, Br
                 v = R[(k + 7) & 7, m]; x7r = v.real; x7i = v.imag
             else:
                 b0 = lstart[i]
+                # first the 8 inputs that came in since this mode's last advance, from the rows
+                for r in range(8):
+                    v = R[(n + r) & 7, m]  # x_{n-8+r}
+                    k = (n - 8 + r + J) % J
+                    L[b0 + k] = v.real
+                    L[b0 + J + k] = v.imag
                 k = n % J
                 x0r = L[b0 + k]; x0i = L[b0 + J + k]
                 k = k + 1 if k + 1 < J else 0
@@ -184,6 +193,20 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, RR, RI, ER, EI, Ar, Ai, Br
             F[(n + 5) & 7, m] = complex(f5r, f5i)
             F[(n + 6) & 7, m] = complex(f6r, f6i)
             F[(n + 7) & 7, m] = complex(f7r, f7i)
+            if J > 8:
+                # the taps j >= 8 of steps n + r (r < 8) are on inputs older than x_n, all in
+                # the ring: added to the tail sums here, so that taps needs only j < 8
+                b0 = lstart[i]
+                w0 = b0 // 2
+                for r in range(8):
+                    kr = 0.0
+                    ki = 0.0
+                    k = (n + r - 8 + J) % J  # x_{n+r-j} in slot (n + r - j) mod Jd, from j = 8 on
+                    for j in range(8, J):
+                        kr += wl[w0 + j] * L[b0 + k]
+                        ki += wl[w0 + j] * L[b0 + J + k]
+                        k = k - 1 if k > 0 else J - 1
+                    F[(n + r) & 7, m] += complex(kr, ki)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
@@ -208,30 +231,3 @@ def taps(x, n, W, R, F, out, scale, scaled):
             if scaled:
                 acc *= scale[m]
             out[m] = acc
-
-
-@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps_long(x, n, modes, lstart, ljd, wl, L, out, scale, scaled):
-    """For the modes with Jd > 8: out[m] += sum_{8 <= j < Jd} w_j x_{n-j} (times scale[m] if
-    ``scaled``), and x_n into the mode's circular ring L (x_k in slot k mod Jd: real parts,
-    then imaginary parts at +Jd); ``wl[lstart // 2 + j]`` = w_j."""
-    for i in numba.prange(modes.size):
-        m = modes[i]
-        J = ljd[i]
-        b0 = lstart[i]
-        w0 = b0 // 2
-        k = (n - 8) % J
-        accr = 0.0
-        acci = 0.0
-        for j in range(8, J):  # x_{n-j} in slot (n - j) mod Jd, walking back from n - 8
-            accr += wl[w0 + j] * L[b0 + k]
-            acci += wl[w0 + j] * L[b0 + J + k]
-            k = k - 1 if k > 0 else J - 1
-        v = x[m]
-        k = n % J
-        L[b0 + k] = v.real
-        L[b0 + J + k] = v.imag
-        if scaled:
-            accr *= scale[m]
-            acci *= scale[m]
-        out[m] += complex(accr, acci)

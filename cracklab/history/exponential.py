@@ -351,7 +351,7 @@ class ExponentialEngine:
         R, weights W, tail sums F: row j or slot k, then the mode); advance works through
         the modes sorted by gamma, one eighth per step (states by sorted position,
         coefficient rows read in order); modes with more than 8 taps keep a ring of their
-        own (L, circular) for taps_long and for their states' inputs."""
+        own (L, circular), from which advance takes their states' inputs and taps j >= 8."""
         m, jd_u, inv = self.gamma.size, self._jd_u, self._inv
         # advance's eighths are eighths of the natural order, each sorted by gamma
         order = np.lexsort((inv, np.arange(m) * _BLOCK // max(m, 1)))
@@ -427,7 +427,7 @@ class ExponentialEngine:
         if hi > lo:
             _set_threads(threads)
             _blocked().advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
-                               self._L, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+                               self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
 
     def _scale_for(self, scale):
         """``scale`` flat and contiguous (kept for the next push with the same array)."""
@@ -501,11 +501,7 @@ class ExponentialEngine:
             self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
             sc = self._scale_for(scale)
-            kern = _blocked()
-            kern.taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
-            if self._lmodes.size:
-                kern.taps_long(x, n, self._lmodes, self._lstart, self._ljd, self._wl, self._L, flat,
-                               _ONE if sc is None else sc, sc is not None)
+            _blocked().taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
             self.n = n + 1
             # the next step's eighth is advanced from the ring that now ends with x_n: here, or
             # (overlap) on the worker thread from launch() while the caller goes on

@@ -76,7 +76,9 @@ def main(argv=None):
     (out / "bench.json").write_text(json.dumps(results, indent=1))
 
     def title(e, f):
-        return f"{e} thread{'s' if e > 1 else ''}" if e == f else f"{e} engine threads, {f} FFT thread{'s' if f > 1 else ''}"
+        name = f"{e} thread{'s' if e > 1 else ''}" if e == f else f"{e} engine threads, {f} FFT thread{'s' if f > 1 else ''}"
+        overlap = any(r.get("overlap") for r in results if (r["engine_threads"], r["threads"]) == (e, f))
+        return name + (" (the engine's advance overlapped with the FFTs and the law)" if overlap else "")
 
     md = "\n\n".join(title(e, f) + ":\n\n" + table([r for r in results if (r["engine_threads"], r["threads"]) == (e, f)])
                       for e, f in configs)
