@@ -49,7 +49,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
     durations = []
     stepper = Stepper(scene)
-    overlap = any(getattr(ch.engine, "overlap", False) for ch in stepper.response.channels.values())
+    overlap = any(ch.engine.overlap for ch in stepper.response.channels.values())
     it = iter(stepper)
     if progress:
         from tqdm.auto import tqdm

@@ -144,8 +144,9 @@ def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03,
         F3[i] = cc * f3 - ss * f2
 
 
-_PY = {"shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
-       "axpy": _axpy_loop, "xpay": _xpay_loop, "mean_step": _mean_step_loop, "hkv": _hkv_loop}
+_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
+       "shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "axpy": _axpy_loop,
+       "xpay": _xpay_loop, "mean_step": _mean_step_loop, "hkv": _hkv_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):

@@ -253,21 +253,20 @@ class Response:
         n = self.n
         D = self._forward(delta)
         F = {}
-        if self.formulation == "displacement":
+        displacement = self.formulation == "displacement"
+        if displacement:
             for name, ch in self.channels.items():  # the prefactor with the 1/N of the inverse FFT
                 F[name] = ch.engine.push(D[name], out=self._S[name], scale=self._pre_n[name])
-            self._launch()
-            self.n = n + 1
-            return self._inverse(F, prescaled=True)
-        V = self._forward(v_prev, "V") if n > 0 else None
-        for name, ch in self.channels.items():
-            Fn = ch.static * D[name]
-            if n > 0:
-                if n == 1:
-                    ch.v0 = V[name].copy()
-                conv = ch.engine.push(V[name]) - 0.5 * ch.engine.weight(n - 1) * ch.v0
-                Fn = Fn + ch.pre * conv
-            F[name] = Fn
+        else:
+            V = self._forward(v_prev, "V") if n > 0 else None
+            for name, ch in self.channels.items():
+                Fn = ch.static * D[name]
+                if n > 0:
+                    if n == 1:
+                        ch.v0 = V[name].copy()
+                    conv = ch.engine.push(V[name]) - 0.5 * ch.engine.weight(n - 1) * ch.v0
+                    Fn = Fn + ch.pre * conv
+                F[name] = Fn
         self._launch()
         self.n = n + 1
-        return self._inverse(F)
+        return self._inverse(F, prescaled=displacement)

@@ -78,9 +78,8 @@ class Transforms:
         self.workers = int(workers or os.environ.get("CRACKLAB_FFT_THREADS", "1"))
         self.backend = backend or backend_name()
         self.spectral_shape = grid.spectral_shape
-        self._scale = 1.0 / (self.shape[0] * self.shape[1])
         #: 1/N, the factor of the inverse transform (see ``inverse(prescaled=True)``)
-        self.norm = self._scale
+        self.norm = 1.0 / (self.shape[0] * self.shape[1])
         if self.backend == "pyfftw":
             self._plan()
 
@@ -151,11 +150,11 @@ class Transforms:
                 src = inv.input_array
             if out is None:
                 inv.execute()
-                res = inv.output_array.copy() if prescaled else inv.output_array * self._scale
+                res = inv.output_array.copy() if prescaled else inv.output_array * self.norm
                 return res[:, None] if self.plane else res
             self._execute_into(inv, src, out)
             if not prescaled:
-                np.multiply(out, self._scale, out=out)
+                np.multiply(out, self.norm, out=out)
             return out
         norm = "forward" if prescaled else "backward"
         if self.plane:

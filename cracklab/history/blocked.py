@@ -46,8 +46,8 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
     Inputs x_{n+j-Jd}, j < 8, as kept after step n - 1: for Jd = 8, R[(n + j) % 8, m]; for
     Jd > 8, slot (n + j) mod Jd of the mode's circular ring in L (real parts, then imaginary
     parts at +Jd; ``lstart`` per sorted position), which first takes x_{n-8} .. x_{n-1}
-    from the rows.  RR/RI: rho_p, ER/EI:
-    e_p per unique gamma (rows ``us``); the states Ar..Bi per sorted position.
+    from the rows.  RR/RI: rho_p, ER/EI: e_p per unique gamma (rows ``us``); the states
+    Ar..Bi per sorted position.
     """
     P = RR.shape[1]
     nc = 16

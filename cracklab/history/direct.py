@@ -104,6 +104,8 @@ class DirectEngine:
         self.n = n + 1
         return deliver(s, self.shape, out, scale)
 
+    overlap = False  # no work left for a worker thread (see ExponentialEngine.overlap)
+
     def launch(self) -> None:
         """Nothing to start: the direct engine does all its work in push (see ExponentialEngine.launch)."""
 

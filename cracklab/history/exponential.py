@@ -375,7 +375,7 @@ class ExponentialEngine:
             sel = np.flatnonzero(ljd == J)
             wl[lstart[sel][:, None] // 2 + np.arange(J)[None, :]] = \
                 self._wflat[self._wstart_u[inv[lm[sel]]][:, None] + np.arange(J)[None, :]]
-        self._lmodes, self._ljd, self._lstart, self._wl = lm, ljd, lstart, wl
+        self._wl = wl
         self._L = np.zeros(int(2 * ljd.sum()))
         at = np.zeros(m, dtype=np.int64)
         at[lm] = lstart
@@ -390,8 +390,7 @@ class ExponentialEngine:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
             arrs = [self._R, self._W, self._L, self._wl, self._wflat, self._rr, self._ri, self._er, self._ei,
-                    self._F, self._order, self._us, self._lmodes, self._ljd, self._lstart, self._lstart_sorted,
-                    *self._states]
+                    self._F, self._order, self._us, self._lstart_sorted, *self._states]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
