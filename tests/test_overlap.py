@@ -42,6 +42,37 @@ def test_overlapped_sums_are_the_sums_of_push(launch_every):
             assert np.array_equal(sa[k], sb[k]), k
 
 
+def test_start_weight_ahead_is_the_start_weight_asked_for():
+    """The product rule's start-up weight E_0(n), computed ahead with the advance (on the
+    worker with overlap, in launch without), is the value the engine gives when asked
+    without launching, to the bit, and the exact E_0(n) to the fit's accuracy; the array of
+    one step is not overwritten while that step uses it."""
+    if X._backend_choice() != "numba":
+        pytest.skip("the overlap is a feature of the numba backend")
+    kw = dict(kernel="II", rule="product", formulation="velocity", lag=1)
+    plain, ahead, serial = _engine(2, **kw), _engine(2, **kw), _engine(1, **kw)
+    rng = np.random.default_rng(7)
+    gam = plain.gamma
+    for n in range(1, 150):
+        x = rng.standard_normal(plain.shape) + 1j * rng.standard_normal(plain.shape)
+        plain.push(x)
+        ref = plain.start_weight(n).copy()
+        got = []
+        for eng in (ahead, serial):
+            eng.push(x)
+            e0 = eng.start_weight(n)
+            keep = e0.copy()
+            eng.launch()           # E_0(n + 1) is computed now (worker or here) ...
+            eng._join()
+            assert np.array_equal(e0, keep), n  # ... into the other buffer
+            got.append(keep)
+        assert np.array_equal(got[0], ref) and np.array_equal(got[1], ref), n
+        if n in (5, 40, 149):
+            exact = X._exact_weights("II", gam, np.full(gam.shape, n), nu=0.25, rule="product",
+                                     formulation="velocity", part="start0").reshape(plain.shape)
+            assert np.max(np.abs(ref - exact)) <= 1e-4 * np.max(np.abs(exact)), n
+
+
 def test_a_worker_error_reaches_the_caller(monkeypatch):
     """An error inside the worker's advance is raised by the next push, not lost."""
     if X._backend_choice() != "numba":

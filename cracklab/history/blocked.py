@@ -9,8 +9,10 @@ advanced through the next :data:`BLOCK` steps at once, from inputs already kept:
 the natural mode order, sorted by gamma so that the coefficient rows are read in order),
 keeping the states in registers for the eight steps and storing the eight tail sums in
 ``F``, and adds to them the taps j >= 8 of the modes that have more than 8 (small
-gamma: those inputs are older than x_n); :func:`taps` then returns
-``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step n for every mode.
+gamma: those inputs are older than x_n); :func:`pretaps` adds the taps 1 <= j < 8 of the
+next step to its row (the two run together, on the engine's worker thread when it has
+one), and :func:`taps` returns ``S_n = w_0 x_n`` plus the stored sum of step n for every
+mode.
 
 Layout.  The last 8 inputs of every mode are kept slot by slot over the modes ("tap
 major"): ``R[k % 8, m] = x_k``, with the weights ``W[j, m] = w_j`` and the tail sums
@@ -210,10 +212,11 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps(x, n, W, R, F, out, scale, scaled):
-    """out[m] = F[n % 8, m] + sum_{j < 8} W[j, m] x_{n-j} (times scale[m] if ``scaled``), and
-    R[n % 8, m] = x_n; x_{n-j} = R[(n - j) % 8, m].  Whole rows, natural mode order."""
-    M = x.size
+def pretaps(n, W, R, F):
+    """F[n % 8, m] += sum_{1 <= j < 8} W[j, m] x_{n-j}, x_{n-j} = R[(n - j) % 8, m]: the taps of
+    step n on inputs already kept, added ahead of the step (after advance has written the
+    row), so that :func:`taps` has only w_0 x_n left.  Whole rows, natural mode order."""
+    M = R.shape[1]
     k0 = n & 7
     k1 = (n - 1) & 7
     k2 = (n - 2) & 7
@@ -224,9 +227,20 @@ def taps(x, n, W, R, F, out, scale, scaled):
     k7 = (n - 7) & 7
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
+            F[k0, m] += (W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m] + W[4, m] * R[k4, m]
+                         + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+
+
+@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
+def taps(x, n, W, R, F, out, scale, scaled):
+    """out[m] = F[n % 8, m] + W[0, m] x_n (times scale[m] if ``scaled``) and R[n % 8, m] = x_n;
+    F holds the tail sum and the taps j >= 1 of step n (:func:`advance`, :func:`pretaps`)."""
+    M = x.size
+    k0 = n & 7
+    for c in numba.prange(64):
+        for m in range(c * M // 64, (c + 1) * M // 64):
             v = x[m]
-            acc = (F[k0, m] + W[0, m] * v + W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m]
-                   + W[4, m] * R[k4, m] + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+            acc = F[k0, m] + W[0, m] * v
             R[k0, m] = v
             if scaled:
                 acc *= scale[m]

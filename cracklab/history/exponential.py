@@ -305,6 +305,8 @@ class ExponentialEngine:
             self._e0c[zero] = 0.0
             self._e0pow = None
             self._e0_zero = None
+        # start_weight's values: the last computed (step _e0next_n) and its two buffers
+        self._e0next = self._e0next_n = self._e0bufs = None
         # weight() cache: powers rho^k for the last k asked
         self._wk = None
         self._wpow = None
@@ -418,15 +420,18 @@ class ExponentialEngine:
 
     @property
     def _layout(self) -> str:
-        return "numba-tapmajor" if self.backend == "numba" else self.backend
+        return "numba-pretaps" if self.backend == "numba" else self.backend
 
     def _advance(self, n, threads):
-        """Advance the states of eighth n mod 8 through steps n .. n + 7 (blocked.advance)."""
+        """Ready step n before x_n comes: advance the states of eighth n mod 8 through steps
+        n .. n + 7 (blocked.advance), then add the taps 1 <= j < 8 of step n (blocked.pretaps)."""
         lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+        _set_threads(threads)
+        blocked = _blocked()
         if hi > lo:
-            _set_threads(threads)
-            _blocked().advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
-                               self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+            blocked.advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
+                            self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+        blocked.pretaps(n, self._W, self._R, self._F)
 
     def _scale_for(self, scale):
         """``scale`` flat and contiguous (kept for the next push with the same array)."""
@@ -442,11 +447,19 @@ class ExponentialEngine:
 
         The caller pushes every channel of a step first, then launches, then does the work
         that does not touch the engine (transforms, interface law) while the states advance;
-        the next push (or get_state) waits for them.  A no-op when nothing is due.
+        the next push (or get_state) waits for them.  Without overlap, only the next step's
+        start_weight is computed here (if it is in use).
         """
         if self._due is not None and self._pending is None:
-            self._pending = _worker().submit(self._advance, self._due, 1)
+            self._pending = _worker().submit(self._ahead, self._due)
             self._due = None
+        elif self._pending is None:
+            self._start_ahead()
+
+    def _ahead(self, n):
+        """The worker's job after a push: the advance due, and the next start-up weight."""
+        self._advance(n, 1)
+        self._start_ahead()
 
     def _join(self):
         """Finish the advance due after the last push: wait for the worker (re-raising its
@@ -458,7 +471,7 @@ class ExponentialEngine:
             due, self._due = self._due, None
             self._advance(due, self.threads)
 
-    _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n")
+    _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n", "_e0next", "_e0next_n")
 
     def get_state(self) -> dict:
         """The dynamic state (step count, direct-tap buffers, recursive states, and the powers
@@ -534,12 +547,23 @@ class ExponentialEngine:
 
         Exact for n < J0, from the fit beyond: 2 Re sum_p c_p E(z_p) rho_p^n with
         E(z) = -(e^z - 1 - z)/z^2, the powers updated by one multiplication per call.
+        Once asked for, E_0 of the next step is computed ahead with the states' advance
+        (on the worker thread with ``overlap``); the array returned is valid for one step.
         """
         if self.rule != "product":
             raise ValueError("start_weight is defined for the product rule only")
         n = int(n)
         if n < self.lag:
             raise ValueError(f"n must be >= lag = {self.lag}, got {n}")
+        if self._e0next is not None and self._e0next_n == n:
+            return self._e0next
+        if self._e0bufs is None:
+            self._e0bufs = (np.empty(self.shape), np.empty(self.shape))
+        a, b = self._e0bufs
+        return self._start_into(n, b if self._e0next is a else a)
+
+    def _start_into(self, n, dest):
+        """E_0(n) into ``dest`` (shape of gamma); kept as the value for step n."""
         ug = self._ug
         if n < self.lag + 1 or self._e0pow is None or n != self._e0n + 1 or n % _RESYNC == 0:
             z = ug[:, None] * self.fit.lam[None, :]
@@ -557,7 +581,16 @@ class ExponentialEngine:
             if self._e0_zero is None:
                 self._e0_zero = float(_exact_weights(self.kernel, 0.0, 1, part="start0", **self._exact))
             out[zero] = self._e0_zero
-        return out[self._inv].reshape(self.shape)
+        np.take(out, self._inv, out=dest.reshape(-1))
+        self._e0next, self._e0next_n = dest, n
+        return dest
+
+    def _start_ahead(self):
+        """E_0 of the next push's step (if start_weight is in use), into the buffer that the
+        current step does not use: the same operations as asking for it then."""
+        if self._e0bufs is not None and self._e0next_n == self.n:
+            a, b = self._e0bufs
+            self._start_into(self.n + 1, b if self._e0next is a else a)
 
     def weight(self, j: int) -> np.ndarray:
         """w_{j+lag} for every mode, as applied by push() (no kernel evaluation: O(P) per mode).
