@@ -249,20 +249,35 @@ def law_parameters(law) -> dict:
     return {f.name: getattr(law, f.name) for f in fields(law)}
 
 
-def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
+def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     """Step (v): compare strength with the elastic estimate tau* and solve Eq. (3) for v.
 
-    ``tau_star[j]`` is the traction if the plane did not move further (load plus f_j).
+    ``tau_star[j]`` is the traction if the plane did not move further (load plus f_j);
+    with ``load`` = (g, {j: tau0_j}) it is f_j, and tau* = f_j + g tau0_j (added in the
+    compiled pass, else in place first: the same numbers either way).
     Normal component: v = (tau* - S)/eta, non-negative where the point is not fully
     broken, limited by contact. Shear: |v| = (|tau*| - S)^+/eta along tau*.
     Returns (v, tau) as dicts over the active components.
     """
     v = {}
     done = {}  # components whose v (bonded points included) and tau are final
-    if 2 in tau_star and loops.compiled() and np.ndim(tau_star[2]) > 0:  # one compiled pass, same numbers
+    compiled = loops.compiled()
+    shape = np.shape(next(iter(tau_star.values())))
+    normal_fused = 2 in tau_star and compiled and len(shape) > 0
+    shear_fused = compiled and all(c in tau_star for c in SHEAR)
+    if load is not None:  # what the compiled passes do not add, added here
+        fused = {2} if normal_fused and loops.fusable_load(load, shape, (2,)) else set()
+        fused |= set(SHEAR) if shear_fused and loops.fusable_load(load, shape, SHEAR) else set()
+        for c in tau_star:
+            if c not in fused:
+                loops.add_scaled(tau_star[c], load[0], load[1][c])
+        loads = {c: (load if c in fused else None) for c in (2, 1)}
+    else:
+        loads = {2: None, 1: None}
+    if normal_fused:  # one compiled pass, same numbers
         contact = delta[2] if getattr(law, "contact", False) else None
         v[2], done[2] = loops.normal_velocity(tau_star[2], strength, eta[2], law.broken(state), contact, dt,
-                                              law.bonded)
+                                              law.bonded, load=loads[2])
     elif 2 in tau_star:
         v2 = (tau_star[2] - strength) / eta[2]
         broken = law.broken(state)
@@ -271,8 +286,9 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength):
             v2 = np.maximum(v2, -delta[2] / dt)
         v[2] = v2
     shear = [c for c in SHEAR if c in tau_star]
-    if len(shear) == 2 and loops.compiled():  # one compiled pass, the same numbers as below
-        v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded)
+    if shear_fused:  # one compiled pass, the same numbers as below
+        v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded,
+                                                            load=loads[1])
         shear = []
     if shear:
         mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))

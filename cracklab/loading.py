@@ -71,6 +71,10 @@ class Loading:
             g *= np.sqrt(self.l0 / crack_length)
         return g
 
+    def terms(self, t: float, components, crack_length: float | None = None) -> tuple:
+        """(g(t), {c: tau0_c}): tau0(t) = g tau0_c, for :func:`cracklab.laws.solve_velocity`."""
+        return self.factor(t, crack_length), {c: self.field(c) for c in components}
+
     def at(self, t: float, components, crack_length: float | None = None) -> dict:
         g = self.factor(t, crack_length)
         return {c: g * self.field(c) for c in components}

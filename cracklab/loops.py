@@ -14,7 +14,8 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
 * :func:`normal_velocity`: step (v) for the normal component (opening rate and
   traction, with the law's broken mask, contact and bonded points);
 * :func:`add_scaled`: y += a x in place (the slip update, the load added to f), and
-  :func:`plus_scaled` (x + a y, new), :func:`add_mean_step` (y += a (x1 + x2)),
+  :func:`plus_scaled` (x + a y), :func:`plus_mean` (y + a (x1 + x2); in place,
+  :func:`add_mean_step`),
   :func:`plus_product` (H + K V) for the product scheme's trial slips and corrector.
 
 Each is a numba loop (compiled on first use, cached on disk); without numba the callers
@@ -50,10 +51,13 @@ def _rotate_loop(c, s, a, b, sign, o1, o2):
         o2[i] = cc * y - ss * x
 
 
-def _shear_loop(t1, t3, strength, scalar, eta, bonded, has_bonded, v1, v3, o1, o3):
+def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_bonded, v1, v3, o1, o3):
     for i in range(t1.size):
         a = t1[i]
         b = t3[i]
+        if has_load:  # tau* = f + g tau0 (add_scaled)
+            a += g * l1[i]
+            b += g * l3[i]
         mag = np.sqrt(a * a + b * b)
         excess = mag - (strength[0] if scalar else strength[i])
         scale = excess / (eta * mag) if (excess > 0.0 and mag > 0.0) else 0.0
@@ -74,9 +78,12 @@ def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
         F[i] = h + K[i] * V[i]
 
 
-def _normal_loop(t2, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded, has_bonded, v2, o2):
+def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded,
+                 has_bonded, v2, o2):
     for i in range(t2.size):
         t = t2[i]
+        if has_load:  # tau* = f + g tau0 (add_scaled)
+            t += g * l2[i]
         v = (t - (strength[0] if scalar else strength[i])) / eta
         if not all_broken and not broken[i] and v < 0.0:  # np.maximum(v, 0): NaN stays NaN
             v = 0.0
@@ -100,9 +107,9 @@ def _xpay_loop(out, x, a, y):
         out[i] = x[i] + a * y[i]
 
 
-def _mean_step_loop(y, a, x1, x2):
-    for i in range(y.size):
-        y[i] += a * (x1[i] + x2[i])
+def _plus_mean_loop(out, y, a, x1, x2):
+    for i in range(out.size):
+        out[i] = y[i] + a * (x1[i] + x2[i])
 
 
 def _hkv_loop(out, H, K, V):
@@ -146,7 +153,7 @@ def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03,
 
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
        "shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "axpy": _axpy_loop,
-       "xpay": _xpay_loop, "mean_step": _mean_step_loop, "hkv": _hkv_loop}
+       "xpay": _xpay_loop, "plus_mean": _plus_mean_loop, "hkv": _hkv_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):
@@ -186,16 +193,32 @@ def _flat_mask(mask, shape):
     return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
 
 
-def shear_velocity(tau1, tau3, strength, eta, bonded=None):
+def _flat_load(load, shape, comps):
+    """(g, flat tau0 of each of ``comps``, True) from load = (g, {c: tau0_c}), or (0, zeros, False)."""
+    if load is None:
+        return (0.0,) + (np.zeros(1),) * len(comps) + (False,)
+    g, fields = load
+    return (float(g),) + tuple(np.ascontiguousarray(fields[c], dtype=float).ravel() for c in comps) + (True,)
+
+
+def fusable_load(load, shape, comps) -> bool:
+    """Whether the compiled step (v) can add ``load`` = (g, {c: tau0_c}) itself: every
+    field of ``comps`` an array of ``shape``."""
+    return load is not None and all(np.shape(load[1][c]) == tuple(shape) for c in comps)
+
+
+def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None):
     """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
     tau = tau* - eta v; returns (v1, v3, tau1, tau3). ``strength`` is an array of the
-    grid's shape or a scalar. Needs numba (:func:`compiled`); without it
-    :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
+    grid's shape or a scalar; ``load`` = (g, {1: tau0_1, 3: tau0_3}): tau* is tau + g tau0
+    (arrays of tau1's shape, :func:`fusable_load`), added in the pass. Needs numba
+    (:func:`compiled`); without it :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
     S, scalar = _flat_strength(strength, tau1.shape)
     b, has_bonded = _flat_mask(bonded, tau1.shape)
     out = [np.empty(tau1.shape) for _ in range(4)]
-    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(), S, scalar,
-      float(eta), b, has_bonded, *(o.ravel() for o in out))
+    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(),
+                       *_flat_load(load, tau1.shape, (1, 3)), S, scalar, float(eta), b, has_bonded,
+                       *(o.ravel() for o in out))
     return tuple(out)
 
 
@@ -214,11 +237,12 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
     return H, F
 
 
-def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None):
+def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None):
     """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
     (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
-    0 where ``bonded``; tau = tau* - eta v.  Returns (v, tau), the same numbers as the
-    numpy expressions of :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
+    0 where ``bonded``; tau = tau* - eta v; ``load`` = (g, {2: tau0_2}) as in
+    :func:`shear_velocity`.  Returns (v, tau), the same numbers as the numpy expressions of
+    :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
     S, scalar = _flat_strength(strength, tau2.shape)
     all_broken = broken is True
     b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
@@ -226,7 +250,8 @@ def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bon
     contact = contact_delta is not None
     d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
     v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
-    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), S, scalar, float(eta), b, all_broken,
+    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, tau2.shape, (2,)),
+                        S, scalar, float(eta), b, all_broken,
                         contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
     return v, tau
 
@@ -247,24 +272,32 @@ def _same(*arrays):
     return all(isinstance(a, np.ndarray) and a.shape == shape and a.flags.c_contiguous for a in arrays)
 
 
-def plus_scaled(x, a, y):
-    """x + a y as a new array (the same numbers as ``x + a * y``)."""
+def plus_scaled(x, a, y, out=None):
+    """x + a y, as a new array or into ``out`` (the same numbers as ``x + a * y``)."""
     f = _compiled("xpay")
     if f is None or not _same(x, y) or x.dtype != float or y.dtype != float:
-        return x + a * y
-    out = np.empty_like(x)
+        return np.add(x, a * y, out=out)
+    if out is None:
+        out = np.empty_like(x)
     f(out.ravel(), x.ravel(), float(a), y.ravel())
+    return out
+
+
+def plus_mean(y, a, x1, x2, out=None):
+    """y + a (x1 + x2), as a new array or into ``out`` (the same numbers as ``y + a * (x1 + x2)``)."""
+    f = _compiled("plus_mean")
+    if f is None or not _same(y, x1, x2) or not (y.dtype == x1.dtype == x2.dtype == float) or \
+            (out is not None and not _same(y, out)):
+        return np.add(y, a * (x1 + x2), out=out)
+    if out is None:
+        out = np.empty_like(y)
+    f(out.ravel(), y.ravel(), float(a), x1.ravel(), x2.ravel())
     return out
 
 
 def add_mean_step(y, a, x1, x2):
     """y += a (x1 + x2) in place (the same numbers as ``y += a * (x1 + x2)``)."""
-    f = _compiled("mean_step")
-    if f is None or not _same(y, x1, x2) or not (y.dtype == x1.dtype == x2.dtype == float):
-        y += a * (x1 + x2)
-        return y
-    f(y.ravel(), float(a), x1.ravel(), x2.ravel())
-    return y
+    return plus_mean(y, a, x1, x2, out=y)
 
 
 def plus_product(H, K, V, out=None):

@@ -8,7 +8,7 @@ import numpy as np
 
 from .errors import SimulationError
 from .laws import solve_velocity
-from .loops import add_mean_step, add_scaled, plus_scaled
+from .loops import add_mean_step, add_scaled, plus_mean, plus_scaled
 from .response import Response
 from .spectral import Transforms
 
@@ -106,21 +106,22 @@ class Stepper:
         area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
         width = grid.L3 if not grid.plane else 1.0
         lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
+        work = {c: np.empty(grid.shape) for c in comps} if product else None  # the trial slips
         for n in range(self.n, scene.nsteps + 1):
             load, l0 = self.load, self.l0
             t = n * dt
             if product:
-                known = {c: plus_scaled(delta[c], 0.5 * dt, v[c]) for c in comps} if n > 0 else delta
                 f = response.predict(v)
-                trial = {c: plus_scaled(known[c], 0.5 * dt, v[c]) for c in comps} if n > 0 else delta
+                # trial slips: delta_{n-1} + dt (v_{n-1} + v_n)/2 with v_n = v_{n-1}, then the predicted v_n
+                trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps} if n > 0 else delta
                 if n > 0:  # predictor: the law on a copy of its state
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
                     # tau* = tau0 + f, in f (the response's work arrays, not used after)
-                    tau_star = load.add_to(f, t, comps, _crack_length(law, pstate, load, area, width, l0))
-                    vp, _ = solve_velocity(law, pstate, tau_star, trial, eta, dt, law.strength(pstate, t, grid))
+                    terms = load.terms(t, comps, _crack_length(law, pstate, load, area, width, l0))
+                    vp, _ = solve_velocity(law, pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms)
                     f = response.correct(vp)
-                    trial = {c: plus_scaled(known[c], 0.5 * dt, vp[c]) for c in comps}
+                    trial = {c: plus_mean(delta[c], 0.5 * dt, v[c], vp[c], out=work[c]) for c in comps}
             elif velocity:
                 dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
                 f = response.functional(dstar, v)
@@ -139,8 +140,8 @@ class Stepper:
                     load = self.load = dataclasses.replace(load, l0=l0)
             length = _crack_length(law, lstate, load, area, width, l0)
             strength = law.strength(lstate, t, grid)
-            tau_star = load.add_to(f, t, comps, length)  # tau0 + f, in f
-            v_new, tau = solve_velocity(law, lstate, tau_star, trial, eta, dt, strength)
+            # tau* = tau0 + f (f: the response's work arrays)
+            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, load.terms(t, comps, length))
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
                 for c in comps:
