@@ -42,6 +42,25 @@ def test_overlapped_sums_are_the_sums_of_push(launch_every):
             assert np.array_equal(sa[k], sb[k]), k
 
 
+@pytest.mark.parametrize("threads", [1, 2])
+def test_taps_ahead_is_a_matter_of_scheduling(threads):
+    """The taps 1 <= j < 8 added with the advance (taps_ahead, the velocity-based schemes)
+    or in push give the same S_n to rounding, with or without the worker; the default
+    follows the formulation."""
+    if X._backend_choice() != "numba":
+        pytest.skip("taps_ahead is a feature of the numba backend")
+    a, b = _engine(threads), _engine(threads)
+    assert not a.taps_ahead and _engine(1, formulation="velocity", lag=1).taps_ahead
+    b.taps_ahead = True
+    rng = np.random.default_rng(5)
+    for n in range(60):
+        x = rng.standard_normal(a.shape) + 1j * rng.standard_normal(a.shape)
+        sa, sb = a.push(x), b.push(x)
+        a.launch(), b.launch()
+        assert np.allclose(sa, sb, rtol=1e-13, atol=1e-13 * np.abs(sa).max()), n
+    assert a.get_state()["layout"] != b.get_state()["layout"]
+
+
 def test_start_weight_ahead_is_the_start_weight_asked_for():
     """The product rule's start-up weight E_0(n), computed ahead with the advance (on the
     worker with overlap, in launch without), is the value the engine gives when asked

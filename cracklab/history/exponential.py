@@ -259,6 +259,12 @@ class ExponentialEngine:
         # two or more threads: the states are advanced on a worker thread while the caller
         # goes on (transforms, interface law) between pushes
         self.overlap = self.backend == "numba" and self.threads >= 2 and _overlap_env()
+        # the taps 1 <= j < 8 of the next step go with the advance (to the worker) in the
+        # velocity-based schemes, whose caller does two transforms or more per pushed channel
+        # besides the law: the caller's thread is the longer one there; the displacement
+        # scheme's one transform pair per push is about as long as the advance, so its taps
+        # stay with the caller (docs/performance.md)
+        self.taps_ahead = formulation != "displacement"
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
         self._scale_src = self._scale_flat = None
@@ -420,18 +426,22 @@ class ExponentialEngine:
 
     @property
     def _layout(self) -> str:
-        return "numba-pretaps" if self.backend == "numba" else self.backend
+        if self.backend != "numba":
+            return self.backend
+        return "numba-pretaps" if self.taps_ahead else "numba-tapmajor"
 
     def _advance(self, n, threads):
         """Ready step n before x_n comes: advance the states of eighth n mod 8 through steps
-        n .. n + 7 (blocked.advance), then add the taps 1 <= j < 8 of step n (blocked.pretaps)."""
+        n .. n + 7 (blocked.advance), then (``taps_ahead``) add the taps 1 <= j < 8 of step n
+        (blocked.pretaps)."""
         lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
         _set_threads(threads)
         blocked = _blocked()
         if hi > lo:
             blocked.advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
                             self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
-        blocked.pretaps(n, self._W, self._R, self._F)
+        if self.taps_ahead:
+            blocked.pretaps(n, self._W, self._R, self._F)
 
     def _scale_for(self, scale):
         """``scale`` flat and contiguous (kept for the next push with the same array)."""
@@ -513,7 +523,8 @@ class ExponentialEngine:
             self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
             sc = self._scale_for(scale)
-            _blocked().taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
+            taps = _blocked().taps0 if self.taps_ahead else _blocked().taps
+            taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
             self.n = n + 1
             # the next step's eighth is advanced from the ring that now ends with x_n: here, or
             # (overlap) on the worker thread from launch() while the caller goes on
