@@ -13,7 +13,7 @@ gamma: those inputs are older than x_n); :func:`taps` then returns
 ``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step n for every mode.  Or,
 where the caller's thread has more to do than the states' advance (the engine's
 ``taps_ahead``), :func:`pretaps` adds the taps 1 <= j < 8 of the next step to its row
-with the advance (on the worker thread when there is one), and :func:`taps0` returns
+with the advance (on the worker thread when there is one), and :func:`taps` returns
 ``w_0 x_n`` plus the stored sum.
 
 Layout.  The last 8 inputs of every mode are kept slot by slot over the modes ("tap
@@ -234,25 +234,10 @@ def pretaps(n, W, R, F):
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps0(x, n, W, R, F, out, scale, scaled):
-    """out[m] = F[n % 8, m] + W[0, m] x_n (times scale[m] if ``scaled``) and R[n % 8, m] = x_n;
-    F holds the tail sum and the taps j >= 1 of step n (:func:`advance`, :func:`pretaps`)."""
-    M = x.size
-    k0 = n & 7
-    for c in numba.prange(64):
-        for m in range(c * M // 64, (c + 1) * M // 64):
-            v = x[m]
-            acc = F[k0, m] + W[0, m] * v
-            R[k0, m] = v
-            if scaled:
-                acc *= scale[m]
-            out[m] = acc
-
-
-@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def taps(x, n, W, R, F, out, scale, scaled):
+def taps(x, n, W, R, F, out, scale, scaled, ahead):
     """out[m] = F[n % 8, m] + sum_{j < 8} W[j, m] x_{n-j} (times scale[m] if ``scaled``), and
-    R[n % 8, m] = x_n; x_{n-j} = R[(n - j) % 8, m]; F holds the tail sum of step n only."""
+    R[n % 8, m] = x_n; x_{n-j} = R[(n - j) % 8, m].  With ``ahead``, F already holds the taps
+    j >= 1 (:func:`pretaps`) and only w_0 x_n is added."""
     M = x.size
     k0 = n & 7
     k1 = (n - 1) & 7
@@ -265,8 +250,11 @@ def taps(x, n, W, R, F, out, scale, scaled):
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
             v = x[m]
-            acc = (F[k0, m] + W[0, m] * v + W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m]
-                   + W[4, m] * R[k4, m] + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+            if ahead:
+                acc = F[k0, m] + W[0, m] * v
+            else:
+                acc = (F[k0, m] + W[0, m] * v + W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m]
+                       + W[4, m] * R[k4, m] + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
             R[k0, m] = v
             if scaled:
                 acc *= scale[m]

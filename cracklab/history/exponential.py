@@ -523,8 +523,8 @@ class ExponentialEngine:
             self._join()  # the states of this step's eighth are advanced (after the last push)
             _set_threads(self.threads)
             sc = self._scale_for(scale)
-            taps = _blocked().taps0 if self.taps_ahead else _blocked().taps
-            taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None)
+            _blocked().taps(x, n, self._W, self._R, self._F, flat, _ONE if sc is None else sc, sc is not None,
+                            self.taps_ahead)
             self.n = n + 1
             # the next step's eighth is advanced from the ring that now ends with x_n: here, or
             # (overlap) on the worker thread from launch() while the caller goes on
