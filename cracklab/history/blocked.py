@@ -219,18 +219,12 @@ def pretaps(n, W, R, F):
     step n on inputs already kept, added ahead of the step (after advance has written the
     row), so that :func:`taps` has only w_0 x_n left.  Whole rows, natural mode order."""
     M = R.shape[1]
-    k0 = n & 7
-    k1 = (n - 1) & 7
-    k2 = (n - 2) & 7
-    k3 = (n - 3) & 7
-    k4 = (n - 4) & 7
-    k5 = (n - 5) & 7
-    k6 = (n - 6) & 7
-    k7 = (n - 7) & 7
+    k = n & 7
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
-            F[k0, m] += (W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m] + W[4, m] * R[k4, m]
-                         + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+            F[k, m] += (W[1, m] * R[(k + 7) & 7, m] + W[2, m] * R[(k + 6) & 7, m] + W[3, m] * R[(k + 5) & 7, m]
+                        + W[4, m] * R[(k + 4) & 7, m] + W[5, m] * R[(k + 3) & 7, m] + W[6, m] * R[(k + 2) & 7, m]
+                        + W[7, m] * R[(k + 1) & 7, m])
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
