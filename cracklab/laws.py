@@ -265,19 +265,17 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     shape = np.shape(next(iter(tau_star.values())))
     normal_fused = 2 in tau_star and compiled and len(shape) > 0
     shear_fused = compiled and all(c in tau_star for c in SHEAR)
-    if load is not None:  # what the compiled passes do not add, added here
-        fused = {2} if normal_fused and loops.fusable_load(load, shape, (2,)) else set()
-        fused |= set(SHEAR) if shear_fused and loops.fusable_load(load, shape, SHEAR) else set()
+    # the load each compiled pass adds itself; the rest is added here first
+    nload = load if normal_fused and loops.fusable_load(load, shape, (2,)) else None
+    sload = load if shear_fused and loops.fusable_load(load, shape, SHEAR) else None
+    if load is not None:
         for c in tau_star:
-            if c not in fused:
+            if (nload if c == 2 else sload) is None:
                 loops.add_scaled(tau_star[c], load[0], load[1][c])
-        loads = {c: (load if c in fused else None) for c in (2, 1)}
-    else:
-        loads = {2: None, 1: None}
     if normal_fused:  # one compiled pass, same numbers
         contact = delta[2] if getattr(law, "contact", False) else None
         v[2], done[2] = loops.normal_velocity(tau_star[2], strength, eta[2], law.broken(state), contact, dt,
-                                              law.bonded, load=loads[2])
+                                              law.bonded, load=nload)
     elif 2 in tau_star:
         v2 = (tau_star[2] - strength) / eta[2]
         broken = law.broken(state)
@@ -288,7 +286,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     shear = [c for c in SHEAR if c in tau_star]
     if shear_fused:  # one compiled pass, the same numbers as below
         v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded,
-                                                            load=loads[1])
+                                                            load=sload)
         shear = []
     if shear:
         mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))

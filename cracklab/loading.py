@@ -79,15 +79,6 @@ class Loading:
         g = self.factor(t, crack_length)
         return {c: g * self.field(c) for c in components}
 
-    def add_to(self, f: dict, t: float, components, crack_length: float | None = None) -> dict:
-        """f[c] += tau0_c(t) in place for each component (the same numbers as ``at(...)[c] + f[c]``)."""
-        from .loops import add_scaled
-
-        g = self.factor(t, crack_length)
-        for c in components:
-            add_scaled(f[c], g, self.field(c))
-        return f
-
 
 def point_load(grid, P: float, x1: float, x3: float = 0.0) -> np.ndarray:
     """Field tau0 = P / (dx1 dx3) at the node nearest (x1, x3), zero elsewhere (section 3.2)."""

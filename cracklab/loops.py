@@ -13,7 +13,7 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
   predictor for the 3D shear channels with the rotations of Eq. (28) in the same pass;
 * :func:`normal_velocity`: step (v) for the normal component (opening rate and
   traction, with the law's broken mask, contact and bonded points);
-* :func:`add_scaled`: y += a x in place (the slip update, the load added to f), and
+* :func:`add_scaled`: y += a x in place (the slip update; the load where step (v) does not add it), and
   :func:`plus_scaled` (x + a y), :func:`plus_mean` (y + a (x1 + x2); in place,
   :func:`add_mean_step`),
   :func:`plus_product` (H + K V) for the product scheme's trial slips and corrector.
@@ -193,7 +193,7 @@ def _flat_mask(mask, shape):
     return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
 
 
-def _flat_load(load, shape, comps):
+def _flat_load(load, comps):
     """(g, flat tau0 of each of ``comps``, True) from load = (g, {c: tau0_c}), or (0, zeros, False)."""
     if load is None:
         return (0.0,) + (np.zeros(1),) * len(comps) + (False,)
@@ -217,7 +217,7 @@ def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None):
     b, has_bonded = _flat_mask(bonded, tau1.shape)
     out = [np.empty(tau1.shape) for _ in range(4)]
     _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(),
-                       *_flat_load(load, tau1.shape, (1, 3)), S, scalar, float(eta), b, has_bonded,
+                       *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded,
                        *(o.ravel() for o in out))
     return tuple(out)
 
@@ -250,7 +250,7 @@ def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bon
     contact = contact_delta is not None
     d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
     v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
-    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, tau2.shape, (2,)),
+    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
                         S, scalar, float(eta), b, all_broken,
                         contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
     return v, tau

@@ -117,7 +117,7 @@ class Stepper:
                 if n > 0:  # predictor: the law on a copy of its state
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
-                    # tau* = tau0 + f, in f (the response's work arrays, not used after)
+                    # tau* = tau0 + f (solve_velocity adds the load; f: the response's work arrays)
                     terms = load.terms(t, comps, _crack_length(law, pstate, load, area, width, l0))
                     vp, _ = solve_velocity(law, pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms)
                     f = response.correct(vp)

@@ -570,8 +570,12 @@ class ExponentialEngine:
             return self._e0next
         if self._e0bufs is None:
             self._e0bufs = (np.empty(self.shape), np.empty(self.shape))
+        return self._start_into(n, self._spare())
+
+    def _spare(self):
+        """The start-weight buffer that does not hold the value last given out."""
         a, b = self._e0bufs
-        return self._start_into(n, b if self._e0next is a else a)
+        return b if self._e0next is a else a
 
     def _start_into(self, n, dest):
         """E_0(n) into ``dest`` (shape of gamma); kept as the value for step n."""
@@ -600,8 +604,7 @@ class ExponentialEngine:
         """E_0 of the next push's step (if start_weight is in use), into the buffer that the
         current step does not use: the same operations as asking for it then."""
         if self._e0bufs is not None and self._e0next_n == self.n:
-            a, b = self._e0bufs
-            self._start_into(self.n + 1, b if self._e0next is a else a)
+            self._start_into(self.n + 1, self._spare())
 
     def weight(self, j: int) -> np.ndarray:
         """w_{j+lag} for every mode, as applied by push() (no kernel evaluation: O(P) per mode).
