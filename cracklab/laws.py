@@ -2,7 +2,8 @@
 
 A law is a frozen dataclass of parameters (scalars or (n1, n3) fields) with three
 plain methods: ``init_state``, ``update`` (after the displacement update, step (i))
-and ``strength``. ``solve_velocity`` is step (v) of the algorithm, shared by all laws.
+and ``strength``; ``reads_slip`` says whether ``update`` reads the slip (a law without it
+is taken to). ``solve_velocity`` is step (v) of the algorithm, shared by all laws.
 Every law takes ``bonded``: a boolean (n1, n3) mask of points that never move.
 """
 from __future__ import annotations
@@ -55,6 +56,7 @@ class TractionFree:
 
     contact: bool = False
     bonded: np.ndarray | None = None
+    reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "traction_free"
     components = ALL
 
@@ -91,6 +93,7 @@ class LinearCohesive:
     delta_c: float | np.ndarray
     initial_crack: np.ndarray | None = None
     bonded: np.ndarray | None = None
+    reads_slip = True  # its update reads delta
     kind = "linear_cohesive"
     components = NORMAL
     contact = True
@@ -131,6 +134,7 @@ class SlipWeakening:
     D_c: float | np.ndarray
     sigma_n: float | np.ndarray
     bonded: np.ndarray | None = None
+    reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "slip_weakening"
     components = SHEAR
 
@@ -184,6 +188,7 @@ class PrescribedRupture:
     strength_before: float | np.ndarray = np.inf
     weakening_time: float = 0.0
     bonded: np.ndarray | None = None
+    reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "prescribed_rupture"
     components = ALL
     contact = False
@@ -249,7 +254,7 @@ def law_parameters(law) -> dict:
     return {f.name: getattr(law, f.name) for f in fields(law)}
 
 
-def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
+def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, peaks=None, traction=True):
     """Step (v): compare strength with the elastic estimate tau* and solve Eq. (3) for v.
 
     ``tau_star[j]`` is the traction if the plane did not move further (load plus f_j);
@@ -257,7 +262,9 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     compiled pass, else in place first: the same numbers either way).
     Normal component: v = (tau* - S)/eta, non-negative where the point is not fully
     broken, limited by contact. Shear: |v| = (|tau*| - S)^+/eta along tau*.
-    Returns (v, tau) as dicts over the active components.
+    Returns (v, tau) as dicts over the active components (tau None unless ``traction``);
+    ``peaks`` (a dict) receives max |v_j| of each component (NaN if v_j is not finite),
+    from the compiled passes where they run.
     """
     v = {}
     done = {}  # components whose v (bonded points included) and tau are final
@@ -275,7 +282,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     if normal_fused:  # one compiled pass, same numbers
         contact = delta[2] if getattr(law, "contact", False) else None
         v[2], done[2] = loops.normal_velocity(tau_star[2], strength, eta[2], law.broken(state), contact, dt,
-                                              law.bonded, load=nload)
+                                              law.bonded, load=nload, peaks=peaks)
     elif 2 in tau_star:
         v2 = (tau_star[2] - strength) / eta[2]
         broken = law.broken(state)
@@ -286,7 +293,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
     shear = [c for c in SHEAR if c in tau_star]
     if shear_fused:  # one compiled pass, the same numbers as below
         v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded,
-                                                            load=sload)
+                                                            load=sload, peaks=peaks, traction=traction)
         shear = []
     if shear:
         mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))
@@ -299,5 +306,11 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None):
         for c in v:
             if c not in done:
                 v[c] = np.where(law.bonded, 0.0, v[c])
+    if peaks is not None:
+        for c in v:
+            if c not in done:
+                peaks[c] = max(float(v[c].max()), -float(v[c].min()))
+    if not traction:
+        return v, None
     tau = {c: done[c] if c in done else tau_star[c] - eta[c] * v[c] for c in v}
     return v, tau

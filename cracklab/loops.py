@@ -24,6 +24,8 @@ operations in the same order, no fast-math).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 _JIT = {}
@@ -51,7 +53,10 @@ def _rotate_loop(c, s, a, b, sign, o1, o2):
         o2[i] = cc * y - ss * x
 
 
-def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_bonded, v1, v3, o1, o3):
+def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_bonded, traction, v1, v3, o1, o3):
+    m1 = 0.0  # max |v1|, max |v3|
+    m3 = 0.0
+    z = 0.0   # NaN if a velocity is not finite
     for i in range(t1.size):
         a = t1[i]
         b = t3[i]
@@ -63,10 +68,17 @@ def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_
         scale = excess / (eta * mag) if (excess > 0.0 and mag > 0.0) else 0.0
         if has_bonded and bonded[i]:
             scale = 0.0
-        v1[i] = scale * a
-        v3[i] = scale * b
-        o1[i] = a - eta * v1[i]
-        o3[i] = b - eta * v3[i]
+        w1 = scale * a
+        w3 = scale * b
+        v1[i] = w1
+        v3[i] = w3
+        if traction:
+            o1[i] = a - eta * w1
+            o3[i] = b - eta * w3
+        m1 = max(m1, abs(w1))
+        m3 = max(m3, abs(w3))
+        z += 0.0 * w1 + 0.0 * w3
+    return m1, m3, z
 
 
 def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
@@ -80,6 +92,8 @@ def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
 
 def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded,
                  has_bonded, v2, o2):
+    m = 0.0  # max |v2|
+    z = 0.0  # NaN if a velocity is not finite
     for i in range(t2.size):
         t = t2[i]
         if has_load:  # tau* = f + g tau0 (add_scaled)
@@ -95,6 +109,9 @@ def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken,
             v = 0.0
         v2[i] = v
         o2[i] = t - eta * v
+        m = max(m, abs(v))
+        z += 0.0 * v
+    return m, z
 
 
 def _axpy_loop(y, a, x):
@@ -117,7 +134,7 @@ def _hkv_loop(out, H, K, V):
         out[i] = H[i] + K[i] * V[i]
 
 
-def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, F1, F3):
+def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, nrm, F1, F3):
     for i in range(c.size):
         cc = c[i]
         ss = 1.0 * s[i]          # Eq. (28): components -> channels (rotate)
@@ -127,13 +144,13 @@ def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, F1, F3):
         v3 = cc * y - ss * x
         f2 = H2[i] + K2[i] * v2  # the corrector, each channel (plus_product)
         f3 = H3[i] + K3[i] * v3
-        ss = -1.0 * s[i]         # and back (rotate, inverse)
-        F1[i] = cc * f2 + ss * f3
-        F3[i] = cc * f3 - ss * f2
+        ss = -1.0 * s[i]         # and back (rotate, inverse), times the inverse FFT's 1/N
+        F1[i] = (cc * f2 + ss * f3) * nrm
+        F3[i] = (cc * f3 - ss * f2) * nrm
 
 
 def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03, v03, dk3, st3, pre3, K3, dt,
-                        H2, H3, F1, F3):
+                        nrm, H2, H3, F1, F3):
     for i in range(c.size):
         d = dk2[i] + dt * V2[i]  # the predictor, each channel (product_predict)
         dk2[i] = d
@@ -146,9 +163,9 @@ def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03,
         H3[i] = h
         f3 = h + K3[i] * V3[i]
         cc = c[i]
-        ss = -1.0 * s[i]         # channels -> components (rotate, inverse)
-        F1[i] = cc * f2 + ss * f3
-        F3[i] = cc * f3 - ss * f2
+        ss = -1.0 * s[i]         # channels -> components (rotate, inverse), times 1/N
+        F1[i] = (cc * f2 + ss * f3) * nrm
+        F3[i] = (cc * f3 - ss * f2) * nrm
 
 
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
@@ -207,19 +224,29 @@ def fusable_load(load, shape, comps) -> bool:
     return load is not None and all(np.shape(load[1][c]) == tuple(shape) for c in comps)
 
 
-def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None):
+def _peak(m, z):
+    """max |v| of a pass, NaN where the pass met a non-finite velocity (z is then NaN)."""
+    return m if z == 0.0 else math.nan
+
+
+def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None, peaks=None, traction=True):
     """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
-    tau = tau* - eta v; returns (v1, v3, tau1, tau3). ``strength`` is an array of the
-    grid's shape or a scalar; ``load`` = (g, {1: tau0_1, 3: tau0_3}): tau* is tau + g tau0
-    (arrays of tau1's shape, :func:`fusable_load`), added in the pass. Needs numba
+    tau = tau* - eta v; returns (v1, v3, tau1, tau3) (the tractions None unless
+    ``traction``). ``strength`` is an array of the grid's shape or a scalar; ``load`` =
+    (g, {1: tau0_1, 3: tau0_3}): tau* is tau + g tau0 (arrays of tau1's shape,
+    :func:`fusable_load`), added in the pass; ``peaks`` (a dict) receives max |v_1|, max
+    |v_3| (NaN if a velocity is not finite) from the same pass. Needs numba
     (:func:`compiled`); without it :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
     S, scalar = _flat_strength(strength, tau1.shape)
     b, has_bonded = _flat_mask(bonded, tau1.shape)
-    out = [np.empty(tau1.shape) for _ in range(4)]
-    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(),
-                       *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded,
-                       *(o.ravel() for o in out))
-    return tuple(out)
+    out = [np.empty(tau1.shape) for _ in range(4 if traction else 2)]
+    o = [a.ravel() for a in out] + ([] if traction else [np.empty(1), np.empty(1)])
+    m1, m3, z = _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(),
+                                   np.ascontiguousarray(tau3, dtype=float).ravel(),
+                                   *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded, bool(traction), *o)
+    if peaks is not None:
+        peaks[1], peaks[3] = _peak(m1, z), _peak(m3, z)
+    return tuple(out) if traction else (out[0], out[1], None, None)
 
 
 def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
@@ -237,12 +264,13 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
     return H, F
 
 
-def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None):
+def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None, peaks=None):
     """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
     (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
     0 where ``bonded``; tau = tau* - eta v; ``load`` = (g, {2: tau0_2}) as in
-    :func:`shear_velocity`.  Returns (v, tau), the same numbers as the numpy expressions of
-    :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
+    :func:`shear_velocity`, and so are ``peaks`` (max |v_2|).  Returns (v, tau), the same
+    numbers as the numpy expressions of :func:`cracklab.laws.solve_velocity`.  Needs numba
+    (:func:`compiled`)."""
     S, scalar = _flat_strength(strength, tau2.shape)
     all_broken = broken is True
     b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
@@ -250,9 +278,11 @@ def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bon
     contact = contact_delta is not None
     d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
     v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
-    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
-                        S, scalar, float(eta), b, all_broken,
-                        contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
+    m, z = _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
+                               S, scalar, float(eta), b, all_broken,
+                               contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
+    if peaks is not None:
+        peaks[2] = _peak(m, z)
     return v, tau
 
 
@@ -313,24 +343,26 @@ def plus_product(H, K, V, out=None):
     return out
 
 
-def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out):
+def shear_correct(c, s, X1, X3, H2, K2, H3, K3, out, scale=1.0):
     """Corrector for 3D shear in one pass: V = rotate(X1, X3) (Eq. 28), F = H + K V per
-    channel, and F back to components, into ``out`` = (F1, F3); the same numbers as
-    :func:`rotate`, :func:`plus_product`, :func:`rotate` (inverse) in turn.  Returns
-    None when the pass cannot run (no numba, or arrays it cannot take)."""
+    channel, and F back to components times ``scale``, into ``out`` = (F1, F3); the same
+    numbers as :func:`rotate`, :func:`plus_product`, :func:`rotate` (inverse) and
+    ``*= scale`` in turn.  Returns None when the pass cannot run (no numba, or arrays it
+    cannot take)."""
     f = _compiled("shear_correct")
     arrs = (c, s, X1, X3, H2, K2, H3, K3) + tuple(out)
     if f is None or not _same(*arrs) or X1.dtype != complex or H2.dtype != complex or out[0].dtype != complex:
         return None
-    f(*(a.ravel() for a in arrs))
+    f(*(a.ravel() for a in arrs[:8]), float(scale), *(a.ravel() for a in arrs[8:]))
     return out
 
 
-def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None)):
+def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None), scale=1.0):
     """Predictor for 3D shear in one pass: for each channel ``(V, S, e0, v0, dknown, static,
     pre, K)`` dknown += dt V, H = static dknown + pre (S + e0 v0), F = H + K V (as
-    :func:`product_predict`), then F back to components into ``out`` = (F1, F3).  Returns
-    (H2, H3), written into the arrays ``H`` where given, or None when the pass cannot run."""
+    :func:`product_predict`), then F back to components times ``scale`` into ``out`` =
+    (F1, F3).  Returns (H2, H3), written into the arrays ``H`` where given, or None when
+    the pass cannot run."""
     f = _compiled("shear_predict")
     if f is None:
         return None
@@ -342,6 +374,6 @@ def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None)):
         return None
     H2, H3 = (h if isinstance(h, np.ndarray) and h.shape == shape and h.dtype == complex and h.flags.c_contiguous
               else np.empty(shape, dtype=complex) for h in H)
-    f(c.ravel(), s.ravel(), *(a.ravel() for a in chans[0]), *(a.ravel() for a in chans[1]), float(dt),
+    f(c.ravel(), s.ravel(), *(a.ravel() for a in chans[0]), *(a.ravel() for a in chans[1]), float(dt), float(scale),
       H2.ravel(), H3.ravel(), out[0].ravel(), out[1].ravel())
     return H2, H3

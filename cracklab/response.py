@@ -177,12 +177,18 @@ class Response:
 
     def _inverse(self, F: dict, prescaled: bool = False) -> dict:
         """f_j of the channel spectra F (destroyed), in the work arrays of the response
-        (``prescaled``: F carries the 1/N of the inverse transform)."""
-        return self._to_real(self._join(F), prescaled)
+        (``prescaled``: F carries the 1/N of the inverse transform; else it is applied to
+        the component spectra, as the fused passes of the product scheme do)."""
+        F = self._join(F)
+        if not prescaled:
+            for Fc in F.values():
+                np.multiply(Fc, self.fft.norm, out=Fc)
+        return self._to_real(F)
 
-    def _to_real(self, F: dict, prescaled: bool = False) -> dict:
-        """f_j of the component spectra F (destroyed), in the work arrays of the response."""
-        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True, prescaled=prescaled) for c, Fc in F.items()}
+    def _to_real(self, F: dict) -> dict:
+        """f_j of the component spectra F (destroyed; they carry the 1/N of the inverse
+        transform), in the work arrays of the response."""
+        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True, prescaled=True) for c, Fc in F.items()}
 
     # -- public -----------------------------------------------------------------------
     def predict(self, v_prev: dict) -> dict:
@@ -205,7 +211,8 @@ class Response:
                      ch.static, ch.pre, ch.K) for k, ch in zip(("II", "III"), chans)]
             self._launch()
             HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"],
-                               H=(chans[0].H, chans[1].H))  # H of the last step is rewritten in place
+                               H=(chans[0].H, chans[1].H),  # H of the last step is rewritten in place
+                               scale=self.fft.norm)
             if HH is not None:
                 chans[0].H, chans[1].H = HH
                 return self._to_real(dict(zip((1, 3), self._rot["join"])))
@@ -233,7 +240,8 @@ class Response:
             # rotation, corrector and rotation back in one compiled pass
             X = {c: self.fft.forward(v_pred[c], out=self._spec["V"][c]) for c in self.components}
             II, III = self.channels["II"], self.channels["III"]
-            out = shear_correct(self.c, self.s, X[1], X[3], II.H, II.K, III.H, III.K, self._rot["join"])
+            out = shear_correct(self.c, self.s, X[1], X[3], II.H, II.K, III.H, III.K, self._rot["join"],
+                                scale=self.fft.norm)
             if out is not None:
                 return self._to_real(dict(zip((1, 3), out)))
             V = self._split(X, "V")

@@ -106,22 +106,38 @@ class Stepper:
         area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
         width = grid.L3 if not grid.plane else 1.0
         lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
-        work = {c: np.empty(grid.shape) for c in comps} if product else None  # the trial slips
+        # the product scheme's trial slips, where the law (or contact) reads the slip
+        trial_slips = product and reads_slip(law, comps)
+        work = {c: np.empty(grid.shape) for c in comps} if trial_slips else None
         for n in range(self.n, scene.nsteps + 1):
             load, l0 = self.load, self.l0
             t = n * dt
+            updated = False  # the law's update of this step is done (and strength, length are set)
             if product:
                 f = response.predict(v)
-                # trial slips: delta_{n-1} + dt (v_{n-1} + v_n)/2 with v_n = v_{n-1}, then the predicted v_n
-                trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps} if n > 0 else delta
-                if n > 0:  # predictor: the law on a copy of its state
+                trial = delta
+                if n > 0 and trial_slips:  # predictor: the law on a copy of its state
+                    # trial slips: delta_{n-1} + dt (v_{n-1} + v_n)/2 with v_n = v_{n-1}
+                    trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps}
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
                     # tau* = tau0 + f (solve_velocity adds the load; f: the response's work arrays)
                     terms = load.terms(t, comps, _crack_length(law, pstate, load, area, width, l0))
-                    vp, _ = solve_velocity(law, pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms)
+                    vp, _ = solve_velocity(law, pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms,
+                                           traction=False)
                     f = response.correct(vp)
+                    # then with the predicted v_n
                     trial = {c: plus_mean(delta[c], 0.5 * dt, v[c], vp[c], out=work[c]) for c in comps}
+                elif n > 0:
+                    # the law reads v_{n-1}, t and tau_{n-1}, not the slip: its update is the
+                    # same for the predictor and the step, done once, and so is its strength
+                    law.update(lstate, delta, dt, v, t, tau)
+                    length = _crack_length(law, lstate, load, area, width, l0)
+                    strength = law.strength(lstate, t, grid)
+                    terms = load.terms(t, comps, length)
+                    vp, _ = solve_velocity(law, lstate, f, delta, eta, dt, strength, terms, traction=False)
+                    f = response.correct(vp)
+                    updated = True
             elif velocity:
                 dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
                 f = response.functional(dstar, v)
@@ -132,31 +148,33 @@ class Stepper:
                         add_scaled(delta[c], dt, v[c])
                 f = response.functional(delta)
                 trial = delta
-            law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
-            if load.constant_K and l0 is None:
-                l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
-                if load.l0 is None:
-                    # Loading.factor scales by sqrt(l0 / l): give it the initial length
-                    load = self.load = dataclasses.replace(load, l0=l0)
-            length = _crack_length(law, lstate, load, area, width, l0)
-            strength = law.strength(lstate, t, grid)
+            if not updated:
+                law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
+                if load.constant_K and l0 is None:
+                    l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+                    if load.l0 is None:
+                        # Loading.factor scales by sqrt(l0 / l): give it the initial length
+                        load = self.load = dataclasses.replace(load, l0=l0)
+                length = _crack_length(law, lstate, load, area, width, l0)
+                strength = law.strength(lstate, t, grid)
+                terms = load.terms(t, comps, length)
             # tau* = tau0 + f (f: the response's work arrays)
-            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, load.terms(t, comps, length))
+            peaks = {}  # max |v_j|, from the same pass
+            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, terms, peaks=peaks)
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
                 for c in comps:
                     add_mean_step(delta[c], 0.5 * dt, v[c], v_new[c])
             v = v_new
             self.v, self.tau, self.n = v, tau, n + 1
-            self._check(n, t, v, load.factor(t, length))
+            self._check(n, t, v, load.factor(t, length), peaks)
             yield State(n, t, delta, v, tau, np.broadcast_to(strength, grid.shape), lstate)
 
-    def _check(self, n, t, v, g):
-        """Stop on a non-finite velocity or on exponential growth (module constants)."""
+    def _check(self, n, t, v, g, peaks):
+        """Stop on a non-finite velocity or on exponential growth (module constants);
+        ``peaks``: max |v_j| of each component (NaN where v_j is not finite)."""
         grid = self.scene.grid
-        peaks = {}
-        for c, vc in v.items():
-            peaks[c] = max(float(vc.max()), -float(vc.min()))
+        for c in v:
             if not np.isfinite(peaks[c]):
                 check_finite(n, t, v, grid)
         self.vscale = max(self.vscale, abs(g) * self._vunit)
@@ -192,6 +210,13 @@ def steps(scene, response=None, start=None):
     Raises SimulationError on a non-finite velocity or exponential growth.
     """
     yield from Stepper(scene, response, start)
+
+
+def reads_slip(law, comps) -> bool:
+    """Whether the law's update or step (v) reads the slip: a law says so with
+    ``reads_slip`` (assumed true when it does not); contact on the normal component reads
+    the opening."""
+    return bool(getattr(law, "reads_slip", True)) or (2 in comps and bool(getattr(law, "contact", False)))
 
 
 def _crack_length(law, state, load, area, width, l0):

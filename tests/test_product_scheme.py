@@ -80,3 +80,47 @@ def test_tpv3_uses_a_stable_shear_scheme():
     sc = tpv3(dx=1000.0, t_end=0.5)
     assert sc.formulation == "product" and sc.beta == 0.125
     assert sc.beta < beta_max(sc.grid, *sc.numerics.scheme((1, 3)), (1, 3))
+
+
+@pytest.mark.parametrize("law_kind", ["slip_weakening", "prescribed"])
+def test_laws_that_read_no_slip_skip_the_trial_slips(monkeypatch, law_kind):
+    """A law whose update reads v, t and tau but not the slip (reads_slip = False) is
+    updated once per step instead of on a copy for the predictor and again for the step:
+    the run is the same to the last bit as with the trial slips and the copy."""
+    from cracklab import PrescribedRupture, SlipWeakening, stepper
+
+    g = Grid(n1=32, n3=16, L1=2.0, L3=1.0)
+    x1, x3 = np.meshgrid(g.x1, g.x3, indexing="ij")
+    patch = (np.abs(x1 - 1.0) < 0.2) & (np.abs(x3 - 0.5) < 0.2)
+    if law_kind == "slip_weakening":
+        law = SlipWeakening(mu_s=0.6, mu_d=0.5, D_c=0.01, sigma_n=1.0)
+    else:
+        law = PrescribedRupture(speed=0.8, origin=(1.0, 0.5), residual=0.5, strength_before=0.6,
+                                weakening_time=0.1)
+    assert law.reads_slip is False
+    sc = Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=g, law=law,
+               loading=Loading(tau0_1=np.where(patch, 0.62, 0.55), tau0_3=0.05), t_end=0.8, beta=0.4,
+               record=Record(fields=("delta_1", "delta_3", "v_1", "tau_3"), every=5),
+               numerics=Numerics(engine="exponential", formulation="product"))
+    fast = simulate(sc)
+    monkeypatch.setattr(stepper, "reads_slip", lambda law, comps: True)
+    slow = simulate(sc)
+    assert float(np.abs(fast.delta_1).max()) > 1e-3
+    for f in ("delta_1", "delta_3", "v_1", "tau_3"):
+        assert np.array_equal(fast[f].values, slow[f].values), f
+
+
+def test_which_laws_read_the_slip():
+    from cracklab import LinearCohesive, SlipWeakening
+    from cracklab.stepper import reads_slip
+
+    assert reads_slip(LinearCohesive(tau_c=1.0, delta_c=0.1), (2,))
+    assert not reads_slip(SlipWeakening(mu_s=0.6, mu_d=0.5, D_c=0.01, sigma_n=1.0), (1, 3))
+    assert reads_slip(TractionFree(contact=True), (1, 2, 3))      # contact reads the opening
+    assert not reads_slip(TractionFree(contact=True), (1, 3))
+    assert not reads_slip(TractionFree(), (1, 2, 3))
+
+    class Custom:  # a law that does not say: taken to read it
+        pass
+
+    assert reads_slip(Custom(), (1, 3))
