@@ -254,7 +254,7 @@ def law_parameters(law) -> dict:
     return {f.name: getattr(law, f.name) for f in fields(law)}
 
 
-def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, peaks=None, traction=True):
+def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
     """Step (v): compare strength with the elastic estimate tau* and solve Eq. (3) for v.
 
     ``tau_star[j]`` is the traction if the plane did not move further (load plus f_j);
@@ -262,9 +262,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, pe
     compiled pass, else in place first: the same numbers either way).
     Normal component: v = (tau* - S)/eta, non-negative where the point is not fully
     broken, limited by contact. Shear: |v| = (|tau*| - S)^+/eta along tau*.
-    Returns (v, tau) as dicts over the active components (tau None unless ``traction``);
-    ``peaks`` (a dict) receives max |v_j| of each component (NaN if v_j is not finite),
-    from the compiled passes where they run.
+    Returns (v, tau) as dicts over the active components (tau None unless ``traction``).
     """
     v = {}
     done = {}  # components whose v (bonded points included) and tau are final
@@ -282,7 +280,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, pe
     if normal_fused:  # one compiled pass, same numbers
         contact = delta[2] if getattr(law, "contact", False) else None
         v[2], done[2] = loops.normal_velocity(tau_star[2], strength, eta[2], law.broken(state), contact, dt,
-                                              law.bonded, load=nload, peaks=peaks)
+                                              law.bonded, load=nload)
     elif 2 in tau_star:
         v2 = (tau_star[2] - strength) / eta[2]
         broken = law.broken(state)
@@ -293,7 +291,7 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, pe
     shear = [c for c in SHEAR if c in tau_star]
     if shear_fused:  # one compiled pass, the same numbers as below
         v[1], v[3], done[1], done[3] = loops.shear_velocity(tau_star[1], tau_star[3], strength, eta[1], law.bonded,
-                                                            load=sload, peaks=peaks, traction=traction)
+                                                            load=sload, traction=traction)
         shear = []
     if shear:
         mag = np.sqrt(sum(tau_star[c] ** 2 for c in shear))
@@ -306,10 +304,6 @@ def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, pe
         for c in v:
             if c not in done:
                 v[c] = np.where(law.bonded, 0.0, v[c])
-    if peaks is not None:
-        for c in v:
-            if c not in done:
-                peaks[c] = max(float(v[c].max()), -float(v[c].min()))
     if not traction:
         return v, None
     tau = {c: done[c] if c in done else tau_star[c] - eta[c] * v[c] for c in v}

@@ -24,8 +24,6 @@ operations in the same order, no fast-math).
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 _JIT = {}
@@ -54,9 +52,6 @@ def _rotate_loop(c, s, a, b, sign, o1, o2):
 
 
 def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_bonded, traction, v1, v3, o1, o3):
-    m1 = 0.0  # max |v1|, max |v3|
-    m3 = 0.0
-    z = 0.0   # NaN if a velocity is not finite
     for i in range(t1.size):
         a = t1[i]
         b = t3[i]
@@ -75,10 +70,6 @@ def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_
         if traction:
             o1[i] = a - eta * w1
             o3[i] = b - eta * w3
-        m1 = max(m1, abs(w1))
-        m3 = max(m3, abs(w3))
-        z += 0.0 * w1 + 0.0 * w3
-    return m1, m3, z
 
 
 def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
@@ -92,8 +83,6 @@ def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
 
 def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded,
                  has_bonded, v2, o2):
-    m = 0.0  # max |v2|
-    z = 0.0  # NaN if a velocity is not finite
     for i in range(t2.size):
         t = t2[i]
         if has_load:  # tau* = f + g tau0 (add_scaled)
@@ -109,9 +98,6 @@ def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken,
             v = 0.0
         v2[i] = v
         o2[i] = t - eta * v
-        m = max(m, abs(v))
-        z += 0.0 * v
-    return m, z
 
 
 def _axpy_loop(y, a, x):
@@ -224,28 +210,19 @@ def fusable_load(load, shape, comps) -> bool:
     return load is not None and all(np.shape(load[1][c]) == tuple(shape) for c in comps)
 
 
-def _peak(m, z):
-    """max |v| of a pass, NaN where the pass met a non-finite velocity (z is then NaN)."""
-    return m if z == 0.0 else math.nan
-
-
-def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None, peaks=None, traction=True):
+def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None, traction=True):
     """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
     tau = tau* - eta v; returns (v1, v3, tau1, tau3) (the tractions None unless
     ``traction``). ``strength`` is an array of the grid's shape or a scalar; ``load`` =
     (g, {1: tau0_1, 3: tau0_3}): tau* is tau + g tau0 (arrays of tau1's shape,
-    :func:`fusable_load`), added in the pass; ``peaks`` (a dict) receives max |v_1|, max
-    |v_3| (NaN if a velocity is not finite) from the same pass. Needs numba
+    :func:`fusable_load`), added in the pass. Needs numba
     (:func:`compiled`); without it :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
     S, scalar = _flat_strength(strength, tau1.shape)
     b, has_bonded = _flat_mask(bonded, tau1.shape)
     out = [np.empty(tau1.shape) for _ in range(4 if traction else 2)]
     o = [a.ravel() for a in out] + ([] if traction else [np.empty(1), np.empty(1)])
-    m1, m3, z = _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(),
-                                   np.ascontiguousarray(tau3, dtype=float).ravel(),
-                                   *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded, bool(traction), *o)
-    if peaks is not None:
-        peaks[1], peaks[3] = _peak(m1, z), _peak(m3, z)
+    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(),
+                       *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded, bool(traction), *o)
     return tuple(out) if traction else (out[0], out[1], None, None)
 
 
@@ -264,13 +241,12 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
     return H, F
 
 
-def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None, peaks=None):
+def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None):
     """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
     (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
     0 where ``bonded``; tau = tau* - eta v; ``load`` = (g, {2: tau0_2}) as in
-    :func:`shear_velocity`, and so are ``peaks`` (max |v_2|).  Returns (v, tau), the same
-    numbers as the numpy expressions of :func:`cracklab.laws.solve_velocity`.  Needs numba
-    (:func:`compiled`)."""
+    :func:`shear_velocity`.  Returns (v, tau), the same numbers as the numpy expressions of
+    :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
     S, scalar = _flat_strength(strength, tau2.shape)
     all_broken = broken is True
     b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
@@ -278,11 +254,9 @@ def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bon
     contact = contact_delta is not None
     d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
     v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
-    m, z = _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
-                               S, scalar, float(eta), b, all_broken,
-                               contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
-    if peaks is not None:
-        peaks[2] = _peak(m, z)
+    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
+                        S, scalar, float(eta), b, all_broken,
+                        contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
     return v, tau
 
 

@@ -159,22 +159,22 @@ class Stepper:
                 strength = law.strength(lstate, t, grid)
                 terms = load.terms(t, comps, length)
             # tau* = tau0 + f (f: the response's work arrays)
-            peaks = {}  # max |v_j|, from the same pass
-            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, terms, peaks=peaks)
+            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, terms)
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
                 for c in comps:
                     add_mean_step(delta[c], 0.5 * dt, v[c], v_new[c])
             v = v_new
             self.v, self.tau, self.n = v, tau, n + 1
-            self._check(n, t, v, load.factor(t, length), peaks)
+            self._check(n, t, v, load.factor(t, length))
             yield State(n, t, delta, v, tau, np.broadcast_to(strength, grid.shape), lstate)
 
-    def _check(self, n, t, v, g, peaks):
-        """Stop on a non-finite velocity or on exponential growth (module constants);
-        ``peaks``: max |v_j| of each component (NaN where v_j is not finite)."""
+    def _check(self, n, t, v, g):
+        """Stop on a non-finite velocity or on exponential growth (module constants)."""
         grid = self.scene.grid
-        for c in v:
+        peaks = {}
+        for c, vc in v.items():
+            peaks[c] = max(float(vc.max()), -float(vc.min()))
             if not np.isfinite(peaks[c]):
                 check_finite(n, t, v, grid)
         self.vscale = max(self.vscale, abs(g) * self._vunit)

@@ -42,10 +42,7 @@ def test_shear_velocity_matches_the_numpy_step(strength_kind, with_bonded):
     bonded = rng.random(shape) < 0.3 if with_bonded else None
     law = TractionFree() if bonded is None else TractionFree(bonded=bonded)
     eta = {1: 0.5, 3: 0.5}
-    peaks = {}
-    v, tau = solve_velocity(law, {}, {1: t1, 3: t3}, None, eta, 0.1, S, peaks=peaks)
-    for c in (1, 3):  # from the same pass: max |v_c|
-        assert peaks[c] == np.abs(v[c]).max() > 0
+    v, tau = solve_velocity(law, {}, {1: t1, 3: t3}, None, eta, 0.1, S)
     v_only, none = solve_velocity(law, {}, {1: t1, 3: t3}, None, eta, 0.1, S, traction=False)
     assert none is None and all(np.array_equal(v_only[c], v[c]) for c in (1, 3))
     mag = np.sqrt(t1**2 + t3**2)
@@ -111,25 +108,6 @@ def test_normal_velocity_matches_the_numpy_step(broken_kind, contact, with_bonde
     assert np.array_equal(v, ref, equal_nan=True)
     assert np.array_equal(tau, t2 - eta * ref, equal_nan=True)
     assert np.isnan(v[3, 3]) == (bonded is None or not bonded[3, 3])
-    peaks = {}
-    loops.normal_velocity(t2, S, eta, broken, delta if contact else None, dt, bonded, peaks=peaks)
-    if np.isnan(v[3, 3]):  # the pass reports a non-finite velocity as a NaN peak
-        assert np.isnan(peaks[2])
-    else:
-        assert peaks[2] == np.abs(v).max() > 0
-
-
-@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
-def test_shear_peaks_see_a_non_finite_velocity(bad):
-    rng = np.random.default_rng(5)
-    t1, t3 = rng.standard_normal((9, 4)), rng.standard_normal((9, 4))
-    t3[4, 2] = bad
-    peaks = {}
-    loops.shear_velocity(t1, t3, 0.1, 0.5, peaks=peaks)
-    assert np.isnan(peaks[1]) and np.isnan(peaks[3])
-    t3[4, 2] = 0.0
-    loops.shear_velocity(t1, t3, 0.1, 0.5, peaks=peaks)
-    assert np.isfinite(peaks[1]) and np.isfinite(peaks[3])
 
 
 def test_add_scaled_matches_numpy():
