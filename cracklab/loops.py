@@ -30,14 +30,16 @@ _JIT = {}
 
 
 def _compiled(name):
-    """The numba version of loop ``name`` (None without numba)."""
+    """The numba version of loop ``name`` (None without numba).  Compiled with numpy's
+    error model: a division by zero gives inf or NaN, as in the numpy expressions, instead of
+    a check per element that keeps the pass from vectorising."""
     if name not in _JIT:
         try:
             import numba
         except Exception:  # pragma: no cover
             _JIT[name] = None
         else:
-            _JIT[name] = numba.njit(cache=True, nogil=True)(_PY[name])
+            _JIT[name] = numba.njit(cache=True, nogil=True, error_model="numpy")(_PY[name])
     return _JIT[name]
 
 
