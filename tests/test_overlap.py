@@ -42,6 +42,50 @@ def test_overlapped_sums_are_the_sums_of_push(launch_every):
             assert np.array_equal(sa[k], sb[k]), k
 
 
+@pytest.mark.parametrize("share", [0.0, 0.3, 0.5])
+def test_the_callers_share_of_the_advance_changes_no_number(share, monkeypatch):
+    """With the caller taking the top of each eighth before it waits (``balance``, the
+    displacement scheme), the sums are those of the engine that advances in push, to the
+    bit, whatever the share."""
+    if X._backend_choice() != "numba":
+        pytest.skip("the overlap is a feature of the numba backend")
+    monkeypatch.setattr(X.ExponentialEngine, "_rebalance", lambda self, *a: None)  # hold the share
+    ref, ov = _engine(1), _engine(2)
+    assert ov.balance and not ref.balance
+    ov._share = share
+    rng = np.random.default_rng(6)
+    split = 0
+    for n in range(100):
+        x = rng.standard_normal(ref.shape) + 1j * rng.standard_normal(ref.shape)
+        assert np.array_equal(ref.push(x), ov.push(x)), n
+        ov.launch()
+        lo, hi = ov._bounds[ov._cut[0] % X._BLOCK], ov._bounds[ov._cut[0] % X._BLOCK + 1]
+        split += ov._cut[1] < hi
+        assert hi - ov._cut[1] == int(share * (hi - lo))
+    assert (split > 50) == (share > 0)
+
+
+def test_the_share_follows_the_imbalance():
+    """The caller's share grows when the worker ended after the caller arrived to wait,
+    shrinks when the worker had finished first, by at most 2 % of an eighth a step, and
+    stays within [0, 1/2]; the taps ahead keep the eighth whole."""
+    eng = _engine(2)
+    if not eng.overlap:
+        pytest.skip("the overlap is a feature of the numba backend")
+    eng._wtimes = (0.0, 1.0)               # 100 positions in 1 s
+    eng._rebalance(0.95, 100, 120)         # the caller waited 0.05 s: a quarter of it moves
+    assert eng._share == pytest.approx(0.25 * 0.05 / (0.01 * 120))
+    for _ in range(100):
+        eng._rebalance(0.0, 100, 120)      # waited 1 s: capped steps, then at most 1/2
+    assert eng._share == 0.5
+    eng._rebalance(1.5, 100, 120)          # the worker was done 0.5 s before
+    assert eng._share == pytest.approx(0.48)
+    for _ in range(100):
+        eng._rebalance(2.0, 100, 120)
+    assert eng._share == 0.0
+    assert not _engine(2, formulation="velocity", lag=1).balance
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 def test_taps_ahead_is_a_matter_of_scheduling(threads):
     """The taps 1 <= j < 8 added with the advance (taps_ahead, the velocity-based schemes)
@@ -100,7 +144,7 @@ def test_a_worker_error_reaches_the_caller(monkeypatch):
     x = np.ones(eng.shape, dtype=complex)
     eng.push(x)
 
-    def boom(self, n, threads):
+    def boom(self, n, threads, part=None):
         raise FloatingPointError(f"advance of step {n} failed")
 
     monkeypatch.setattr(X.ExponentialEngine, "_advance", boom)

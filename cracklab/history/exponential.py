@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import os
+import time
 
 import numpy as np
 
@@ -267,6 +268,9 @@ class ExponentialEngine:
         self.taps_ahead = formulation != "displacement"
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
+        self._share = 0.0      # the caller's share of each eighth (see ``balance``)
+        self._cut = None       # (step, first sorted position of the caller's share) of the pending advance
+        self._wtimes = None    # the worker's (start, end) of its last advance
         self._scale_src = self._scale_flat = None
 
         ug, inv = np.unique(self.gamma, return_inverse=True)
@@ -425,22 +429,32 @@ class ExponentialEngine:
         return out
 
     @property
+    def balance(self) -> bool:
+        """Whether the caller takes a share of each eighth's advance before it waits for the
+        worker: with overlap where the taps stay with the caller (the displacement scheme,
+        whose worker is the longer thread); the share follows the measured imbalance
+        (:meth:`_rebalance`).  With the taps ahead, the worker adds them to whole rows after
+        the advance, so the eighth stays whole."""
+        return self.overlap and not self.taps_ahead
+
+    @property
     def _layout(self) -> str:
         if self.backend != "numba":
             return self.backend
         return "numba-pretaps" if self.taps_ahead else "numba-tapmajor"
 
-    def _advance(self, n, threads):
+    def _advance(self, n, threads, part=None):
         """Ready step n before x_n comes: advance the states of eighth n mod 8 through steps
         n .. n + 7 (blocked.advance), then (``taps_ahead``) add the taps 1 <= j < 8 of step n
-        (blocked.pretaps)."""
-        lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+        (blocked.pretaps).  ``part`` = (lo, hi): only the sorted positions lo .. hi - 1 of
+        the eighth (and no taps)."""
+        lo, hi = part or (self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1])
         _set_threads(threads)
         blocked = _blocked()
         if hi > lo:
             blocked.advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
                             self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
-        if self.taps_ahead:
+        if self.taps_ahead and part is None:
             blocked.pretaps(n, self._W, self._R, self._F)
 
     def _scale_for(self, scale):
@@ -461,25 +475,51 @@ class ExponentialEngine:
         start_weight is computed here (if it is in use).
         """
         if self._due is not None and self._pending is None:
-            self._pending = _worker().submit(self._ahead, self._due)
+            n = self._due
+            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+            cut = hi - int(self._share * (hi - lo)) if self.balance else hi
+            self._cut = (n, cut)
+            self._pending = _worker().submit(self._ahead, n, cut)
             self._due = None
         elif self._pending is None:
             self._start_ahead()
 
-    def _ahead(self, n):
-        """The worker's job after a push: the advance due, and the next start-up weight."""
-        self._advance(n, 1)
+    def _ahead(self, n, cut):
+        """The worker's job after a push: the advance due (the eighth's sorted positions
+        below ``cut``), and the next start-up weight."""
+        t0 = time.perf_counter()
+        lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+        self._advance(n, 1, None if cut == hi else (lo, cut))
         self._start_ahead()
+        self._wtimes = (t0, time.perf_counter())
 
     def _join(self):
-        """Finish the advance due after the last push: wait for the worker (re-raising its
-        error), or run it here if it was never launched."""
+        """Finish the advance due after the last push: the caller's share of it here, then
+        wait for the worker (re-raising its error); or run it all here if it was never launched."""
         pending, self._pending = self._pending, None
         if pending is not None:
+            n, cut = self._cut
+            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+            if cut < hi:
+                self._advance(n, 1, (cut, hi))
+            arrived = time.perf_counter()
             pending.result()
+            if self.balance:
+                self._rebalance(arrived, cut - lo, hi - lo)
         if self._due is not None:
             due, self._due = self._due, None
             self._advance(due, self.threads)
+
+    def _rebalance(self, arrived, done_by_worker, size):
+        """Move part of the next eighths between the threads: a quarter of the measured
+        imbalance (the worker's end against the caller's arrival, at the worker's cost per
+        position), at most 2 % of an eighth per step, the caller's share within [0, 1/2]."""
+        start, end = self._wtimes
+        if done_by_worker <= 0 or size <= 0:
+            return
+        cost = (end - start) / done_by_worker
+        step = 0.25 * (end - arrived) / (cost * size) if cost > 0 else 0.0
+        self._share = min(0.5, max(0.0, self._share + min(0.02, max(-0.02, step))))
 
     _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n", "_e0next", "_e0next_n")
 
