@@ -295,7 +295,9 @@ def test_engine_state_round_trip(name, window):
 
 @pytest.mark.parametrize("name", ["direct", "exponential"])
 def test_push_scale_and_out(name):
-    """push(x, out=, scale=) writes scale * S_n into out: the same numbers as scaling after."""
+    """push(x, out=, scale=) writes scale * S_n into out: the same numbers as scaling after,
+    to rounding (the compiled taps run with fast-math: a part of a complex value that
+    nearly cancels may differ in its last bits)."""
     from cracklab.history import make_engine
 
     rng = np.random.default_rng(8)
@@ -310,4 +312,4 @@ def test_push_scale_and_out(name):
         ra = a.push(x) * scale
         rb = b.push(x, out=out, scale=scale)
         assert rb is out
-        np.testing.assert_allclose(rb, ra, rtol=1e-15, atol=1e-300)
+        np.testing.assert_allclose(rb, ra, rtol=1e-15, atol=1e-15 * np.abs(ra).max())

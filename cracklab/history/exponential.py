@@ -458,12 +458,14 @@ class ExponentialEngine:
             blocked.pretaps(n, self._W, self._R, self._F)
 
     def _scale_for(self, scale):
-        """``scale`` flat and contiguous (kept for the next push with the same array)."""
+        """``scale`` flat, contiguous and writable (kept for the next push with the same array;
+        writable like the unscaled call's, so that both run one compiled version of the taps)."""
         if scale is None:
             return None
         if scale is not self._scale_src:
             self._scale_src = scale
-            self._scale_flat = np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float).reshape(-1)
+            flat = np.ascontiguousarray(np.broadcast_to(scale, self.shape), dtype=float).reshape(-1)
+            self._scale_flat = flat if flat.flags.writeable else flat.copy()
         return self._scale_flat
 
     def launch(self) -> None:
