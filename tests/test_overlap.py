@@ -59,7 +59,7 @@ def test_the_callers_share_of_the_advance_changes_no_number(share, monkeypatch):
         x = rng.standard_normal(ref.shape) + 1j * rng.standard_normal(ref.shape)
         assert np.array_equal(ref.push(x), ov.push(x)), n
         ov.launch()
-        lo, hi = ov._bounds[ov._cut[0] % X._BLOCK], ov._bounds[ov._cut[0] % X._BLOCK + 1]
+        lo, hi = ov._eighth(ov._cut[0])
         split += ov._cut[1] < hi
         assert hi - ov._cut[1] == int(share * (hi - lo))
     assert (split > 50) == (share > 0)

@@ -443,12 +443,16 @@ class ExponentialEngine:
             return self.backend
         return "numba-pretaps" if self.taps_ahead else "numba-tapmajor"
 
+    def _eighth(self, n):
+        """(lo, hi): the sorted positions of the eighth that step n advances."""
+        return self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+
     def _advance(self, n, threads, part=None):
         """Ready step n before x_n comes: advance the states of eighth n mod 8 through steps
         n .. n + 7 (blocked.advance), then (``taps_ahead``) add the taps 1 <= j < 8 of step n
         (blocked.pretaps).  ``part`` = (lo, hi): only the sorted positions lo .. hi - 1 of
         the eighth (and no taps)."""
-        lo, hi = part or (self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1])
+        lo, hi = part or self._eighth(n)
         _set_threads(threads)
         blocked = _blocked()
         if hi > lo:
@@ -478,7 +482,7 @@ class ExponentialEngine:
         """
         if self._due is not None and self._pending is None:
             n = self._due
-            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+            lo, hi = self._eighth(n)
             cut = hi - int(self._share * (hi - lo)) if self.balance else hi
             self._cut = (n, cut)
             self._pending = _worker().submit(self._ahead, n, cut)
@@ -490,7 +494,7 @@ class ExponentialEngine:
         """The worker's job after a push: the advance due (the eighth's sorted positions
         below ``cut``), and the next start-up weight."""
         t0 = time.perf_counter()
-        lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+        lo, hi = self._eighth(n)
         self._advance(n, 1, None if cut == hi else (lo, cut))
         self._start_ahead()
         self._wtimes = (t0, time.perf_counter())
@@ -501,7 +505,7 @@ class ExponentialEngine:
         pending, self._pending = self._pending, None
         if pending is not None:
             n, cut = self._cut
-            lo, hi = self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
+            lo, hi = self._eighth(n)
             if cut < hi:
                 self._advance(n, 1, (cut, hi))
             arrived = time.perf_counter()
