@@ -103,8 +103,7 @@ class Stepper:
         eta = {c: mat.eta(c) for c in comps}
         velocity = scene.formulation == "velocity"
         product = scene.formulation == "product"
-        area = grid.dx1 * (grid.dx3 if not grid.plane else 1.0)
-        width = grid.L3 if not grid.plane else 1.0
+        area, width = _cell_area_and_width(grid)
         lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
         # the product scheme's trial slips, where the law (or contact) reads the slip
         trial_slips = product and reads_slip(law, comps)
@@ -112,7 +111,7 @@ class Stepper:
         for n in range(self.n, scene.nsteps + 1):
             load, l0 = self.load, self.l0
             t = n * dt
-            updated = False  # the law's update of this step is done (and strength, length are set)
+            law_step = None  # (crack length, strength, load terms) once the law's update of step n is done
             if product:
                 f = response.predict(v)
                 trial = delta
@@ -131,13 +130,9 @@ class Stepper:
                 elif n > 0:
                     # the law reads v_{n-1}, t and tau_{n-1}, not the slip: its update is the
                     # same for the predictor and the step, done once, and so is its strength
-                    law.update(lstate, delta, dt, v, t, tau)
-                    length = _crack_length(law, lstate, load, area, width, l0)
-                    strength = law.strength(lstate, t, grid)
-                    terms = load.terms(t, comps, length)
-                    vp, _ = solve_velocity(law, lstate, f, delta, eta, dt, strength, terms, traction=False)
+                    law_step = self._update_law(n, t, delta, v, tau)
+                    vp, _ = solve_velocity(law, lstate, f, delta, eta, dt, *law_step[1:], traction=False)
                     f = response.correct(vp)
-                    updated = True
             elif velocity:
                 dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
                 f = response.functional(dstar, v)
@@ -148,16 +143,7 @@ class Stepper:
                         add_scaled(delta[c], dt, v[c])
                 f = response.functional(delta)
                 trial = delta
-            if not updated:
-                law.update(lstate, trial, dt, v if n > 0 else None, t, tau if n > 0 else None)
-                if load.constant_K and l0 is None:
-                    l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
-                    if load.l0 is None:
-                        # Loading.factor scales by sqrt(l0 / l): give it the initial length
-                        load = self.load = dataclasses.replace(load, l0=l0)
-                length = _crack_length(law, lstate, load, area, width, l0)
-                strength = law.strength(lstate, t, grid)
-                terms = load.terms(t, comps, length)
+            length, strength, terms = law_step or self._update_law(n, t, trial, v, tau)
             # tau* = tau0 + f (f: the response's work arrays)
             v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, terms)
             if (velocity or product) and n > 0:
@@ -166,8 +152,24 @@ class Stepper:
                     add_mean_step(delta[c], 0.5 * dt, v[c], v_new[c])
             v = v_new
             self.v, self.tau, self.n = v, tau, n + 1
-            self._check(n, t, v, load.factor(t, length))
+            self._check(n, t, v, self.load.factor(t, length))
             yield State(n, t, delta, v, tau, np.broadcast_to(strength, grid.shape), lstate)
+
+    def _update_law(self, n, t, trial, v, tau):
+        """Step (i) for the law: its update with the slip ``trial`` (and v, tau of step
+        n - 1), the initial crack length of constant-K loading at the first step; returns
+        the crack length, the strength and the load terms that step (v) takes."""
+        scene, law, lstate = self.scene, self.scene.law, self.lstate
+        area, width = _cell_area_and_width(scene.grid)
+        law.update(lstate, trial, scene.dt, v if n > 0 else None, t, tau if n > 0 else None)
+        load, l0 = self.load, self.l0
+        if load.constant_K and l0 is None:
+            l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+            if load.l0 is None:
+                # Loading.factor scales by sqrt(l0 / l): give it the initial length
+                load = self.load = dataclasses.replace(load, l0=l0)
+        length = _crack_length(law, lstate, load, area, width, l0)
+        return length, law.strength(lstate, t, scene.grid), load.terms(t, scene.components, length)
 
     def _check(self, n, t, v, g):
         """Stop on a non-finite velocity or on exponential growth (module constants)."""
@@ -217,6 +219,11 @@ def reads_slip(law, comps) -> bool:
     ``reads_slip`` (assumed true when it does not); contact on the normal component reads
     the opening."""
     return bool(getattr(law, "reads_slip", True)) or (2 in comps and bool(getattr(law, "contact", False)))
+
+
+def _cell_area_and_width(grid):
+    """Area of a cell and width of the plane across the crack (1 in the plane problem)."""
+    return grid.dx1 * (grid.dx3 if not grid.plane else 1.0), (grid.L3 if not grid.plane else 1.0)
 
 
 def _crack_length(law, state, load, area, width, l0):
