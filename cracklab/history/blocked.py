@@ -6,8 +6,8 @@ inputs (the direct taps) and, per term p, the states s_p of Re x and Im x
 input that enters the states at step n is Jd >= 8 steps old, the states of a mode can be
 advanced through the next :data:`BLOCK` steps at once, from inputs already kept:
 :func:`advance` does so for one eighth of the modes at every step (eighth n mod 8 of
-the natural mode order, sorted by gamma so that the coefficient rows are read in order),
-keeping the states in registers for the eight steps and storing the eight tail sums in
+the natural mode order, with the recursion factors and coefficients of every mode in rows
+of their own, so that every array is streamed in order), keeping the states in registers for the eight steps and storing the eight tail sums in
 ``F``, and adds to them the taps j >= 8 of the modes that have more than 8 (small
 gamma: those inputs are older than x_n); :func:`taps` then returns
 ``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step n for every mode.  Or,
@@ -42,24 +42,22 @@ if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
-def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
-    """Advance the states of sorted positions lo..hi-1 through steps n..n+7; F[(n+j) % 8, m] =
-    tail sum of step n+j for their modes m = order[i] (plus, for Jd > 8, the taps
-    sum_{8 <= k < Jd} w_k x_{n+j-k}, ``wl[lstart // 2 + k]`` = w_k).
+def advance(n, lo, hi, lstart, jd, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
+    """Advance the states of modes lo..hi-1 through steps n..n+7; F[(n+j) % 8, m] = tail sum
+    of step n+j for each mode m (plus, for Jd > 8, the taps sum_{8 <= k < Jd} w_k x_{n+j-k},
+    ``wl[lstart // 2 + k]`` = w_k).
 
     Inputs x_{n+j-Jd}, j < 8, as kept after step n - 1: for Jd = 8, R[(n + j) % 8, m]; for
     Jd > 8, slot (n + j) mod Jd of the mode's circular ring in L (real parts, then imaginary
-    parts at +Jd; ``lstart`` per sorted position), which first takes x_{n-8} .. x_{n-1}
-    from the rows.  RR/RI: rho_p, ER/EI: e_p per unique gamma (rows ``us``); the states
-    Ar..Bi per sorted position.
+    parts at +Jd; ``lstart`` per mode), which first takes x_{n-8} .. x_{n-1} from the rows.
+    RR/RI: rho_p, ER/EI: e_p, and the states Ar..Bi, a row per mode: every array is read
+    (and the states written) in the modes' order.
     """
     P = RR.shape[1]
     nc = 16
     for c in numba.prange(nc):
-        for i in range(lo + c * (hi - lo) // nc, lo + (c + 1) * (hi - lo) // nc):
-            u = us[i]
-            m = order[i]
-            J = jd_u[u]
+        for m in range(lo + c * (hi - lo) // nc, lo + (c + 1) * (hi - lo) // nc):
+            J = jd[m]
             if J == 8:
                 k = n & 7
                 v = R[k, m]; x0r = v.real; x0i = v.imag
@@ -71,7 +69,7 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
                 v = R[(k + 6) & 7, m]; x6r = v.real; x6i = v.imag
                 v = R[(k + 7) & 7, m]; x7r = v.real; x7i = v.imag
             else:
-                b0 = lstart[i]
+                b0 = lstart[m]
                 # first the 8 inputs that came in since this mode's last advance, from the rows
                 for r in range(8):
                     v = R[(n + r) & 7, m]  # x_{n-8+r}
@@ -97,14 +95,14 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
             f0r = 0.0; f1r = 0.0; f2r = 0.0; f3r = 0.0; f4r = 0.0; f5r = 0.0; f6r = 0.0; f7r = 0.0
             f0i = 0.0; f1i = 0.0; f2i = 0.0; f3i = 0.0; f4i = 0.0; f5i = 0.0; f6i = 0.0; f7i = 0.0
             for q in range(P):
-                rr = RR[u, q]
-                ri = RI[u, q]
-                er = ER[u, q]
-                ei = EI[u, q]
-                ar = Ar[i, q]
-                ai = Ai[i, q]
-                br = Br[i, q]
-                bi = Bi[i, q]
+                rr = RR[m, q]
+                ri = RI[m, q]
+                er = ER[m, q]
+                ei = EI[m, q]
+                ar = Ar[m, q]
+                ai = Ai[m, q]
+                br = Br[m, q]
+                bi = Bi[m, q]
                 # step n + 0
                 t0 = ar * rr - ai * ri + x0r
                 t1 = ar * ri + ai * rr
@@ -185,10 +183,10 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
                 br = t2
                 f7r += er * ar - ei * ai
                 f7i += er * br - ei * bi
-                Ar[i, q] = ar
-                Ai[i, q] = ai
-                Br[i, q] = br
-                Bi[i, q] = bi
+                Ar[m, q] = ar
+                Ai[m, q] = ai
+                Br[m, q] = br
+                Bi[m, q] = bi
             F[(n + 0) & 7, m] = complex(f0r, f0i)
             F[(n + 1) & 7, m] = complex(f1r, f1i)
             F[(n + 2) & 7, m] = complex(f2r, f2i)
@@ -200,7 +198,7 @@ def advance(n, lo, hi, order, us, lstart, jd_u, R, L, wl, RR, RI, ER, EI, Ar, Ai
             if J > 8:
                 # the taps j >= 8 of steps n + r (r < 8) are on inputs older than x_n, all in
                 # the ring: added to the tail sums here, so that taps needs only j < 8
-                b0 = lstart[i]
+                b0 = lstart[m]
                 w0 = b0 // 2
                 for r in range(8):
                     kr = 0.0

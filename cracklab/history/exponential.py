@@ -269,7 +269,7 @@ class ExponentialEngine:
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
         self._share = 0.0      # the caller's share of each eighth (see ``balance``)
-        self._cut = None       # (step, first sorted position of the caller's share) of the pending advance
+        self._cut = None       # (step, first mode of the caller's share) of the pending advance
         self._wtimes = None    # the worker's (start, end) of its last advance
         self._scale_src = self._scale_flat = None
 
@@ -361,16 +361,14 @@ class ExponentialEngine:
 
         taps sweeps the modes in their natural order over tap-major rows (the last 8 inputs
         R, weights W, tail sums F: row j or slot k, then the mode); advance works through
-        the modes sorted by gamma, one eighth per step (states by sorted position,
-        coefficient rows read in order); modes with more than 8 taps keep a ring of their
+        one eighth of the modes per step, in the same order (the states, recursion factors
+        and coefficients a row per mode); modes with more than 8 taps keep a ring of their
         own (L, circular), from which advance takes their states' inputs and taps j >= 8."""
         m, jd_u, inv = self.gamma.size, self._jd_u, self._inv
-        # advance's eighths are eighths of the natural order, each sorted by gamma
-        order = np.lexsort((inv, np.arange(m) * _BLOCK // max(m, 1)))
-        self._order, self._us = order.astype(np.int64), inv[order].astype(np.int64)
-        self._jd_u_i = np.ascontiguousarray(jd_u, dtype=np.int64)
+        # advance's eighths are eighths of the natural order
         self._bounds = [m * g // _BLOCK for g in range(_BLOCK + 1)]
         jd = jd_u[inv]
+        self._jd = np.ascontiguousarray(jd, dtype=np.int64)
         # the exact weights w_0 .. w_7 of every mode, row by row
         self._W = np.ascontiguousarray(self._wflat[self._wstart_u[inv][None, :] + np.arange(_BLOCK)[:, None]])
         self._R = np.zeros((_BLOCK, m), dtype=complex)   # x_k in row k % 8
@@ -389,11 +387,13 @@ class ExponentialEngine:
                 self._wflat[self._wstart_u[inv[lm[sel]]][:, None] + np.arange(J)[None, :]]
         self._wl = wl
         self._L = np.zeros(int(2 * ljd.sum()))
-        at = np.zeros(m, dtype=np.int64)
-        at[lm] = lstart
-        self._lstart_sorted = np.ascontiguousarray(at[order])
-        self._rr, self._ri = np.ascontiguousarray(rho_u.real), np.ascontiguousarray(rho_u.imag)
-        self._er, self._ei = np.ascontiguousarray(e_u.real), np.ascontiguousarray(e_u.imag)
+        self._lstart = np.zeros(m, dtype=np.int64)
+        self._lstart[lm] = lstart
+        # the recursion factors and coefficients of every mode (not per distinct gamma): advance
+        # then streams every array in order; a table per gamma, read in the modes' order, costs
+        # a cache line per mode and array (docs/fast_engine.md)
+        self._rr, self._ri = (np.ascontiguousarray(a[inv]) for a in (rho_u.real, rho_u.imag))
+        self._er, self._ei = (np.ascontiguousarray(a[inv]) for a in (e_u.real, e_u.imag))
         self._states = [np.zeros((m, self.pairs)) for _ in range(4)]  # Re and Im of s_p for Re x, then Im x
 
     # ------------------------------------------------------------------ public
@@ -402,7 +402,7 @@ class ExponentialEngine:
         """Bytes held by the per-mode state (buffers, weights, recursion factors, states)."""
         if self.backend == "numba":
             arrs = [self._R, self._W, self._L, self._wl, self._wflat, self._rr, self._ri, self._er, self._ei,
-                    self._F, self._order, self._us, self._lstart_sorted, *self._states]
+                    self._F, self._jd, self._lstart, *self._states]
         else:
             arrs = [self._wflat, self._rho, self._ef, self._sig, self._xin, self._xp, self._S]
             for g in self._groups:
@@ -441,23 +441,24 @@ class ExponentialEngine:
     def _layout(self) -> str:
         if self.backend != "numba":
             return self.backend
-        return "numba-pretaps" if self.taps_ahead else "numba-tapmajor"
+        # "-modes": the states are kept in the modes' order (not sorted by gamma as before)
+        return "numba-pretaps-modes" if self.taps_ahead else "numba-tapmajor-modes"
 
     def _eighth(self, n):
-        """(lo, hi): the sorted positions of the eighth that step n advances."""
+        """(lo, hi): the modes lo .. hi - 1 of the eighth that step n advances."""
         return self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
 
     def _advance(self, n, threads, part=None):
         """Ready step n before x_n comes: advance the states of eighth n mod 8 through steps
         n .. n + 7 (blocked.advance), then (``taps_ahead``) add the taps 1 <= j < 8 of step n
-        (blocked.pretaps).  ``part`` = (lo, hi): only the sorted positions lo .. hi - 1 of
+        (blocked.pretaps).  ``part`` = (lo, hi): only the modes lo .. hi - 1 of
         the eighth (and no taps)."""
         lo, hi = part or self._eighth(n)
         _set_threads(threads)
         blocked = _blocked()
         if hi > lo:
-            blocked.advance(n, lo, hi, self._order, self._us, self._lstart_sorted, self._jd_u_i, self._R,
-                            self._L, self._wl, self._rr, self._ri, self._er, self._ei, *self._states, self._F)
+            blocked.advance(n, lo, hi, self._lstart, self._jd, self._R, self._L, self._wl, self._rr, self._ri,
+                            self._er, self._ei, *self._states, self._F)
         if self.taps_ahead and part is None:
             blocked.pretaps(n, self._W, self._R, self._F)
 
@@ -491,7 +492,7 @@ class ExponentialEngine:
             self._start_ahead()
 
     def _ahead(self, n, cut):
-        """The worker's job after a push: the advance due (the eighth's sorted positions
+        """The worker's job after a push: the advance due (the eighth's modes
         below ``cut``), and the next start-up weight."""
         t0 = time.perf_counter()
         lo, hi = self._eighth(n)
