@@ -52,6 +52,7 @@ class Stepper:
     def __init__(self, scene, response=None, start=None):
         self.scene = scene
         grid, comps = scene.grid, scene.components
+        self.comps = comps          # scene.components tests the load fields: once, not every step
         if response is None:
             response = Response.for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
         self.response = response
@@ -97,7 +98,7 @@ class Stepper:
         """Steps (i)-(v); see :func:`steps`."""
         scene = self.scene
         grid, mat, law = scene.grid, scene.material, scene.law
-        comps = scene.components
+        comps = self.comps
         dt = scene.dt
         response = self.response
         eta = {c: mat.eta(c) for c in comps}
@@ -169,7 +170,7 @@ class Stepper:
                 # Loading.factor scales by sqrt(l0 / l): give it the initial length
                 load = self.load = dataclasses.replace(load, l0=l0)
         length = _crack_length(law, lstate, load, area, width, l0)
-        return length, law.strength(lstate, t, scene.grid), load.terms(t, scene.components, length)
+        return length, law.strength(lstate, t, scene.grid), load.terms(t, self.comps, length)
 
     def _check(self, n, t, v, g):
         """Stop on a non-finite velocity or on exponential growth (module constants)."""
