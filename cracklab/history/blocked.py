@@ -7,10 +7,11 @@ input that enters the states at step n is Jd >= 8 steps old, the states of a mod
 advanced through the next :data:`BLOCK` steps at once, from inputs already kept:
 :func:`advance` does so for one eighth of the modes at every step (eighth n mod 8 of
 the natural mode order, with the recursion factors and coefficients of every mode in rows
-of their own, so that every array is streamed in order), keeping the states in registers for the eight steps and storing the eight tail sums in
-``F``, and adds to them the taps j >= 8 of the modes that have more than 8 (small
-gamma: those inputs are older than x_n); :func:`taps` then returns
-``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step n for every mode.  Or,
+of their own, so that every array is streamed in order), keeping the states in registers
+for the eight steps and storing the eight tail sums in ``F``, and adds to them the taps
+j >= 8 of the modes that have more than 8 (small gamma: those inputs are older than x_n);
+:func:`taps` then returns ``S_n = sum_j w_j x_{n-j}`` (j < 8) plus the stored sum of step
+n for every mode.  Or,
 where the caller's thread has more to do than the states' advance (the engine's
 ``taps_ahead``), :func:`pretaps` adds the taps 1 <= j < 8 of the next step to its row
 with the advance (on the worker thread when there is one), and :func:`taps` returns

@@ -441,7 +441,7 @@ class ExponentialEngine:
     def _layout(self) -> str:
         if self.backend != "numba":
             return self.backend
-        # "-modes": the states are kept in the modes' order (not sorted by gamma as before)
+        # "-modes": the states are kept in the modes' order (a state kept sorted by gamma is refused)
         return "numba-pretaps-modes" if self.taps_ahead else "numba-tapmajor-modes"
 
     def _eighth(self, n):
