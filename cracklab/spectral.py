@@ -11,6 +11,7 @@ Choose with the environment variable CRACKLAB_FFT=pyfftw|scipy; threads with
 """
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import socket
@@ -37,19 +38,21 @@ def _wisdom_path() -> Path:
     return cache_dir() / f"fftw-wisdom-{socket.gethostname()}.pickle"
 
 
-_WISDOM_LOADED = False
-
-
 def _load_wisdom():
-    global _WISDOM_LOADED
-    if _WISDOM_LOADED:
-        return
-    _WISDOM_LOADED = True
+    """Make the host's wisdom file the process's wisdom (when it can be read): every plan is
+    then the one the file holds for its size, whichever process measured it first, so that
+    a run and its resumption in another process transform with the same plan (and give the
+    same numbers to the bit).  Without a readable file the process keeps its own wisdom."""
     try:
         with open(_wisdom_path(), "rb") as fh:
-            pyfftw.import_wisdom(pickle.load(fh))
+            wisdom = pickle.load(fh)
     except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):
-        pass  # no or unreadable wisdom: plan afresh
+        return  # no or unreadable wisdom: plan afresh
+    pyfftw.forget_wisdom()
+    try:
+        pyfftw.import_wisdom(wisdom)
+    except (ValueError, TypeError):
+        pass
 
 
 def _save_wisdom():
@@ -62,6 +65,26 @@ def _save_wisdom():
         os.replace(tmp, path)  # atomic: concurrent writers never leave a torn file
     except OSError:
         pass  # a read-only cache only costs planning time
+
+
+@contextlib.contextmanager
+def _wisdom_lock():
+    """Plans are made one process at a time per host (a lock file beside the wisdom): the
+    first to plan a size measures it and saves it, the others then read it (_load_wisdom)."""
+    try:
+        import fcntl
+
+        path = _wisdom_path().with_suffix(".lock")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fh = open(path, "a")
+    except (ImportError, OSError):
+        yield  # no locking here (another platform, or a read-only cache)
+        return
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        yield
+    finally:
+        fh.close()  # releases the lock
 
 
 def backend_name() -> str:
@@ -84,7 +107,12 @@ class Transforms:
             self._plan()
 
     def _plan(self):
-        _load_wisdom()
+        with _wisdom_lock():
+            _load_wisdom()
+            self._make_plans()
+            _save_wisdom()
+
+    def _make_plans(self):
         n1, n3 = self.shape
         flags = ("FFTW_MEASURE",)
         if self.plane:
@@ -100,7 +128,6 @@ class Transforms:
             self._inv = pyfftw.FFTW(pyfftw.empty_aligned(b.shape, dtype="complex128"),
                                     pyfftw.empty_aligned(a.shape, dtype="float64"), axes=(0, 1),
                                     direction="FFTW_BACKWARD", threads=self.workers, flags=flags)
-        _save_wisdom()
 
     def empty(self, spectral: bool = True) -> np.ndarray:
         """A work array the transforms read or write in place (``out=``, ``overwrite=``):

@@ -1,3 +1,5 @@
+import pickle
+
 import numpy as np
 import pytest
 
@@ -85,6 +87,34 @@ def test_backends_agree(backend, shape, tmp_path, monkeypatch):
     np.testing.assert_allclose(X * 2, Y, atol=1e-12)
     np.testing.assert_allclose(f.inverse(X), x, atol=1e-12)
     np.testing.assert_allclose(X, ref.forward(x), atol=1e-12)  # inverse left its input alone
+
+
+def test_plans_follow_the_wisdom_file(tmp_path, monkeypatch):
+    """A process that planned on its own (here under another cache) still takes the host's
+    wisdom file as it stands when it plans a size the file holds: it measures nothing anew
+    and leaves the file as it was, so a run and its resumption in another process use the
+    same plan (tests/test_resume.py compares them to the bit)."""
+    pyfftw = pytest.importorskip("pyfftw")
+    from cracklab import spectral
+
+    def entries(wisdom):  # FFTW's wisdom as sets of entries (their order varies)
+        return [set(w.decode().splitlines()) for w in wisdom]
+
+    def on_file():
+        return entries(pickle.loads(spectral._wisdom_path().read_bytes()))
+
+    g = Grid(n1=24, n3=16, L1=1.0, L3=1.0)
+    monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "host"))
+    Transforms(g, backend="pyfftw")
+    saved = on_file()
+    pyfftw.forget_wisdom()
+    monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "other"))
+    Transforms(Grid(n1=20, n3=12, L1=1.0, L3=1.0), backend="pyfftw")  # wisdom of its own
+    assert entries(pyfftw.export_wisdom()) != saved
+    monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "host"))
+    Transforms(g, backend="pyfftw")
+    assert on_file() == saved
+    assert entries(pyfftw.export_wisdom()) == saved
 
 
 @pytest.mark.parametrize("backend", ["scipy", "pyfftw"])
