@@ -285,6 +285,26 @@ def test_cache_round_trip_and_corruption(tmp_cache):
     assert np.array_equal(F.get_fit("III", NU, "velocity").coef, fit.coef)
 
 
+def test_the_cache_file_decides_the_fit(tmp_cache, tmp_path, monkeypatch):
+    """A fit's last bits depend on the process that computed it (BLAS threads), and a run
+    resumed in another process reads the cache file: get_fit gives the file's fit, not one
+    it holds in memory from another cache, and a fit computed while another process stored
+    its own first is not written over it."""
+    fit = F.get_fit("III", NU, "velocity")
+    key = F._key("III", NU, "velocity", fit.T0, fit.tol)
+    other = F.ExpFit("III", NU, "velocity", fit.T0, fit.tol, fit.lam, fit.coef * (1 + 1e-13), fit.err,
+                     fit.k0, fit.orders)  # as another process might have computed it
+    monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "elsewhere"))
+    path = F._cache_path(key)
+    F._store(path, key, other)
+    got = F.get_fit("III", NU, "velocity")  # the same fit in memory, from the first cache
+    assert np.array_equal(got.coef, other.coef) and not np.array_equal(got.coef, fit.coef)
+    # first stored wins: a later store without replace leaves the file alone
+    F._store(path, key, fit, replace=False)
+    assert np.array_equal(F._load(path, key, "III", NU, "velocity", fit.T0, fit.tol).coef, other.coef)
+    assert not list(path.parent.glob("*.tmp"))
+
+
 def test_cache_concurrent_writers_and_unwritable_dir(tmp_cache, tmp_path, monkeypatch):
     fit = F.get_fit("III", NU, "displacement")
     path = next(tmp_cache.glob("expfit-*.npz"))

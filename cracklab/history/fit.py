@@ -457,8 +457,10 @@ def _load(path: Path, key, kernel, nu, formulation, T0, tol, T_end=math.inf):
     return fit
 
 
-def _store(path: Path, key, fit: ExpFit):
-    """Write atomically (temp file in the same directory, then os.replace); never raises."""
+def _store(path: Path, key, fit: ExpFit, replace: bool = True):
+    """Write atomically (temp file in the same directory, then os.replace); never raises.
+    ``replace=False``: leave a file that another process wrote in the meantime (the first
+    fit stored is the one every process then reads, see get_fit)."""
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -468,8 +470,16 @@ def _store(path: Path, key, fit: ExpFit):
                      orders=np.array(fit.orders), err=np.array(fit.err))
             f.flush()
             os.fsync(f.fileno())
-        os.replace(tmp, path)
-        tmp = None
+        if not replace:
+            try:
+                os.link(tmp, path)  # fails if the file is there
+            except FileExistsError:
+                pass
+            except OSError:  # no hard links on this file system
+                replace = True
+        if replace:
+            os.replace(tmp, path)
+            tmp = None
     except OSError as exc:
         warnings.warn(f"cracklab: could not write the kernel-fit cache {path}: {exc}", RuntimeWarning,
                       stacklevel=3)
@@ -494,22 +504,30 @@ def get_fit(kernel, nu=0.25, formulation="displacement", *, T0=DEFAULT_T0, tol=N
     nu, T0, tol = float(nu), float(T0), float(tol)
     T_end = range_bucket(T_end)
     key = _key(kernel, nu, formulation, T0, tol, T_end)
-    with _LOCK:
-        fit = _MEMORY.get(key)
-    if fit is not None:
-        return fit
     path = None
     if use_disk:
         try:
             path = _cache_path(key)
         except Exception:  # no usable home directory: memory cache only
             path = None
+    # the fits in memory are those of their cache file: the last bits of a fit depend on the
+    # process that computed it (BLAS threads), and a run resumed in another process reads
+    # the file, so a process must not keep one of its own beside it (nor one of another cache)
+    mkey = (str(path), key)
+    with _LOCK:
+        fit = _MEMORY.get(mkey)
+    if fit is not None:
+        return fit
     if path is not None:
+        existed = path.exists()
         fit = _load(path, key, kernel, nu, formulation, T0, tol, T_end)
     if fit is None:
         fit = fit_kernel(kernel, nu=nu, formulation=formulation, T0=T0, tol=tol, T_end=T_end)
         if path is not None:
-            _store(path, key, fit)
+            # a bad file is replaced; a new one only if no other process stored its fit first,
+            # whose fit is then read back and used here too
+            _store(path, key, fit, replace=existed)
+            fit = _load(path, key, kernel, nu, formulation, T0, tol, T_end) or fit
     with _LOCK:
-        _MEMORY[key] = fit
+        _MEMORY[mkey] = fit
     return fit
