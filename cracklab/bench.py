@@ -34,42 +34,82 @@ def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads
                  record=Record(fields=()), numerics=numerics, name="bench")
 
 
-def fft_pair_ms(grid, repeats=50, threads=1):
-    f = Transforms(grid, threads)
-    x = np.random.default_rng(1).standard_normal(grid.shape)
-    times = []
-    for _ in range(repeats):
+class _Pair:
+    """One forward and one inverse transform of the grid as a step runs them (into work
+    arrays, the inverse destroying its input and carrying 1/N: no copy, no scaling pass)."""
+
+    def __init__(self, grid, threads=1):
+        self.f = f = Transforms(grid, threads)
+        self.x = f.empty(spectral=False)
+        self.x[...] = np.random.default_rng(1).standard_normal(grid.shape)
+        self.X, self.y = f.empty(), f.empty(spectral=False)
+
+    def __call__(self) -> float:
+        """Seconds for one pair."""
+        f = self.f
         t0 = time.perf_counter()
-        f.inverse(f.forward(x))
-        times.append(time.perf_counter() - t0)
-    return 1e3 * float(np.median(times))
+        f.forward(self.x, out=self.X)
+        f.inverse(self.X, out=self.y, overwrite=True, prescaled=True)
+        return time.perf_counter() - t0
+
+
+def fft_pair_ms(grid, repeats=50, threads=1):
+    """Median of ``repeats`` transform pairs (:class:`_Pair`), ms."""
+    pair = _Pair(grid, threads)
+    return 1e3 * float(np.median([pair() for _ in range(repeats)]))
+
+
+#: in the timed half of a bench, one FFT pair is timed after every PAIR_EVERY-th step
+PAIR_EVERY = 10
 
 
 def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None):
+    """Time every step of a bench scene; the median over the second half is the figure.
+
+    The FFT baseline is timed in the same stretch (a pair after every PAIR_EVERY-th timed
+    step), and the transforms a step runs are counted, so that ``fft_floor_ms`` (their
+    cost at the baseline's rate) can be set against the step on the same host, same minute.
+    """
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
-    durations = []
     stepper = Stepper(scene)
-    overlap = any(ch.engine.overlap for ch in stepper.response.channels.values())
+    response = stepper.response
+    overlap = any(ch.engine.overlap for ch in response.channels.values())
+    pair = _Pair(scene.grid, threads)
     it = iter(stepper)
     if progress:
         from tqdm.auto import tqdm
 
         it = tqdm(it, total=scene.nsteps + 1, unit="step", desc="bench")
+    half = (scene.nsteps + 1) // 2  # the second half is timed
+    durations, pairs, counted, skip = [], [], 0, False
     t0 = time.perf_counter()
-    for _ in it:
-        t1 = time.perf_counter()
-        durations.append(t1 - t0)
-        t0 = t1
-    timed = np.asarray(durations[len(durations) // 2:])
-    grid = scene.grid
+    for n, _ in enumerate(it):
+        durations.append(np.nan if skip else time.perf_counter() - t0)
+        skip = False
+        if n == half - 1:
+            counted = response.fft.count
+        elif n >= half and (n - half) % PAIR_EVERY == PAIR_EVERY - 1:
+            # the baseline in the same stretch of time as the steps it is compared with,
+            # the engines' worker idle; the step after it (its advance done here) is not timed
+            response.wait()
+            pairs.append(pair())
+            skip = True
+        t0 = time.perf_counter()
+    timed = np.asarray(durations[half:])
+    transforms = (response.fft.count - counted) / max(1, timed.size)
+    timed = timed[np.isfinite(timed)]
     ms = 1e3 * float(np.median(timed))
+    pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads)
     return {
         "n1": n1, "n3": n3, "mode": mode, "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (n1 * n3),
         "threads": int(threads), "engine_threads": scene.numerics.history_threads,
         "overlap": overlap,
-        "fft_pair_ms": fft_pair_ms(grid, threads=threads),
+        "fft_pair_ms": pair_ms,
+        "fft_pairs_timed": len(pairs),
+        "transforms_per_step": transforms,
+        "fft_floor_ms": 0.5 * transforms * pair_ms,
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     }

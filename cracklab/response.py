@@ -155,6 +155,12 @@ class Response:
         for ch in self.channels.values():
             ch.engine.launch()
 
+    def wait(self) -> None:
+        """Let every channel's engine finish the work its last push started (no thread of
+        the response runs after this until the next step)."""
+        for ch in self.channels.values():
+            ch.engine.wait()
+
     # -- spectral helpers ------------------------------------------------------------
     def _split(self, X: dict, slot: str = "D") -> dict:
         return split_channels(X, self.channels, self.shear3d, self.c, self.s, self._rot.get(slot))

@@ -103,6 +103,8 @@ class Transforms:
         self.spectral_shape = grid.spectral_shape
         #: 1/N, the factor of the inverse transform (see ``inverse(prescaled=True)``)
         self.norm = 1.0 / (self.shape[0] * self.shape[1])
+        #: transforms run so far, forward and inverse (``cracklab bench`` counts them per step)
+        self.count = 0
         if self.backend == "pyfftw":
             self._plan()
 
@@ -139,6 +141,7 @@ class Transforms:
 
     def forward(self, x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """Spectrum of the real field x: a new array, or written into ``out`` (spectral shape)."""
+        self.count += 1
         if self.backend == "pyfftw":
             fwd = self._fwd
             src = x[:, 0] if self.plane else x
@@ -168,6 +171,7 @@ class Transforms:
         """Real field of the spectrum X (normalised by 1/N like scipy's inverse): a new array,
         or written into ``out``; ``overwrite=True`` lets the transform destroy X (no copy in);
         ``prescaled=True``: X already carries the factor :attr:`norm` = 1/N (no pass for it)."""
+        self.count += 1
         if self.backend == "pyfftw":
             inv = self._inv
             src = X[:, 0] if self.plane else X

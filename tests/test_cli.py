@@ -73,6 +73,22 @@ def test_bench_json():
     res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "32", "--steps", "20", "--json"])
     assert res.exit_code == 0, res.output
     out = json.loads(res.output)
-    for key in ("ms_per_step", "fft_pair_ms", "peak_rss_mb", "engine"):
+    for key in ("ms_per_step", "fft_pair_ms", "peak_rss_mb", "engine", "transforms_per_step", "fft_floor_ms"):
         assert key in out
     assert out["ms_per_step"] > 0 and out["fft_pair_ms"] > 0
+    # the baseline was timed within the run (one pair after every 10th of the 10 timed steps)
+    assert out["fft_pairs_timed"] == 1 and out["timed_steps"] == 10
+    # mode I, displacement scheme: one transform forward and one back per step
+    assert out["transforms_per_step"] == 2
+    assert out["fft_floor_ms"] == out["fft_pair_ms"]
+
+
+def test_bench_counts_the_shear_transforms():
+    """The product scheme (default for shear) transforms both components forward and back
+    in the predictor and again in the corrector: eight transforms per step."""
+    from cracklab.bench import run
+
+    out = run(16, 16, "shear", 30, engine="exponential", engine_threads=2)
+    assert out["overlap"] and out["fft_pairs_timed"] == 1
+    assert out["transforms_per_step"] == 8
+    assert out["fft_floor_ms"] == 4 * out["fft_pair_ms"]

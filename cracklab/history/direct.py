@@ -82,6 +82,9 @@ class DirectEngine:
             buf[p + new] = v
         self._buf, self._bufcap = buf, new
 
+    def wait(self) -> None:
+        """Nothing runs between pushes (the interface of ExponentialEngine.wait)."""
+
     def push(self, x: np.ndarray, out: np.ndarray | None = None, scale: np.ndarray | None = None) -> np.ndarray:
         """Push x_n (shape of gamma) and return S_n of the same shape (written into ``out`` if
         given; multiplied by ``scale``, real, shape of gamma, if given)."""

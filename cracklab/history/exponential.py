@@ -500,6 +500,11 @@ class ExponentialEngine:
         self._start_ahead()
         self._wtimes = (t0, time.perf_counter())
 
+    def wait(self) -> None:
+        """Finish the advance the last push left (on the worker or here): the engine is idle
+        until the next push."""
+        self._join()
+
     def _join(self):
         """Finish the advance due after the last push: the caller's share of it here, then
         wait for the worker (re-raising its error); or run it all here if it was never launched."""

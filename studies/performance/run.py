@@ -40,13 +40,14 @@ def bench(n1, n3, mode, steps, engine, threads, engine_threads=None):
 
 def table(results) -> str:
     lines = ["| grid | mode | steps | engine | ms / step | us / point / step | FFT pair ms | "
-             "ratio to FFT pair | peak RSS MB | target ms |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+             "ratio to FFT pair | transforms / step | their cost ms | peak RSS MB | target ms |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         tgt = TARGETS.get((r["n1"], r["n3"], r["mode"]))
         lines.append(f"| {r['n1']} x {r['n3']} | {r['mode']} | {r['steps']} | {r['engine']} | "
                      f"{r['ms_per_step']:.2f} | {r['us_per_point_per_step']:.3f} | {r['fft_pair_ms']:.2f} | "
-                     f"{r['ms_per_step'] / r['fft_pair_ms']:.1f} | {r['peak_rss_mb']:.0f} | "
+                     f"{r['ms_per_step'] / r['fft_pair_ms']:.1f} | {r['transforms_per_step']:g} | "
+                     f"{r['fft_floor_ms']:.2f} | {r['peak_rss_mb']:.0f} | "
                      f"{'' if tgt is None else tgt} |")
     return "\n".join(lines)
 
