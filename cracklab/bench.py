@@ -11,6 +11,7 @@ from .laws import TractionFree
 from .loading import Loading
 from .material import Material
 from .record import Record
+from .response import Response
 from .scene import Numerics, Scene
 from .spectral import Transforms, backend_name
 from .stability import beta_max
@@ -63,15 +64,18 @@ def fft_pair_ms(grid, repeats=50, threads=1):
 PAIR_EVERY = 10
 
 
-def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None):
+def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None):
     """Time every step of a bench scene; the median over the second half is the figure.
 
     The FFT baseline is timed in the same stretch (a pair after every PAIR_EVERY-th timed
     step), and the transforms a step runs are counted, so that ``fft_floor_ms`` (their
     cost at the baseline's rate) can be set against the step on the same host, same minute.
+    ``fit_steps``: the exponential engine's kernel fits cover that many steps instead of the
+    run's (runs of different lengths then carry the same terms: their costs compare the
+    history's length alone).
     """
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
-    stepper = Stepper(scene)
+    stepper = Stepper(scene, Response.for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
     response = stepper.response
     overlap = any(ch.engine.overlap for ch in response.channels.values())
     pair = _Pair(scene.grid, threads)
@@ -110,6 +114,8 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "fft_pairs_timed": len(pairs),
         "transforms_per_step": transforms,
         "fft_floor_ms": 0.5 * transforms * pair_ms,
+        "fit_steps": max(scene.nsteps, fit_steps or 0),
+        "terms": {name: getattr(ch.engine, "pairs", None) for name, ch in response.channels.items()},
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
     }

@@ -221,15 +221,18 @@ def export(store, netcdf, member) -> None:
               help="Threads for the history engine only (default: --threads); with 2 or more it "
                    "advances its states on a thread of its own, overlapping the FFTs (fastest on two "
                    "cores: --threads 1 --engine-threads 2).")
+@click.option("--fit-steps", type=click.IntRange(min=1), default=None,
+              help="Fit the kernels for this many steps instead of the run's length (the exponential "
+                   "engine's terms then do not depend on --steps).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from .errors import InputError
 
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
-                           threads=threads, engine_threads=engine_threads)
+                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:

@@ -123,11 +123,12 @@ class Response:
         self.n = 0
 
     @classmethod
-    def for_scene(cls, scene, transforms=None):
-        """The response a run of ``scene`` uses (its scheme, engine, window and length)."""
+    def for_scene(cls, scene, transforms=None, nsteps=None):
+        """The response a run of ``scene`` uses (its scheme, engine, window and length;
+        ``nsteps``: the length the kernels' fits must cover instead, if longer)."""
         return cls(scene.material, scene.grid, scene.dt, scene.components, formulation=scene.formulation,
                    engine=scene.numerics.engine, window=scene.numerics.window, transforms=transforms,
-                   nsteps=scene.nsteps, threads=scene.numerics.history_threads)
+                   nsteps=max(scene.nsteps, nsteps or 0), threads=scene.numerics.history_threads)
 
     # -- state (checkpoints) -----------------------------------------------------------
     def get_state(self) -> dict:

@@ -92,3 +92,19 @@ def test_bench_counts_the_shear_transforms():
     assert out["overlap"] and out["fft_pairs_timed"] == 1
     assert out["transforms_per_step"] == 8
     assert out["fft_floor_ms"] == 4 * out["fft_pair_ms"]
+
+
+def test_bench_fit_steps_fixes_the_terms():
+    """--fit-steps: runs of different lengths carry the same exponential terms (the fit
+    covers the longer length), so their costs differ by the history's length alone."""
+    from cracklab.bench import run
+
+    short = run(16, 16, "I", 20, engine="exponential", fit_steps=4000)
+    longer = run(16, 16, "I", 200, engine="exponential", fit_steps=4000)
+    own = run(16, 16, "I", 20, engine="exponential")
+    assert short["fit_steps"] == longer["fit_steps"] == 4000 and own["fit_steps"] == 20
+    assert short["terms"] == longer["terms"]
+    # the run's own length asks for fewer terms than a fit over 4000 steps
+    assert own["terms"]["I"] < short["terms"]["I"]
+    res = CliRunner().invoke(main, ["bench", "--n1", "16", "--n3", "16", "--steps", "10", "--fit-steps", "0"])
+    assert res.exit_code != 0 and "--fit-steps" in res.output
