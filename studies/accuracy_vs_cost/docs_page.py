@@ -105,7 +105,7 @@ def write_page(rows, path):
       "given accuracy for the least computing time? This page measures it for the two problems "
       "with exact solutions, Lamb's problem on the full grid and the single Fourier mode, and is "
       "written by the study from its own output:\n")
-    w("```sh\n.venv/bin/python studies/accuracy_vs_cost/run.py            # full: ~9 min on 2 busy cores\n"
+    w("```sh\n.venv/bin/python studies/accuracy_vs_cost/run.py            # full: ~6 min on an idle machine\n"
       ".venv/bin/python studies/accuracy_vs_cost/run.py --quick    # ~30 s; writes results/quick/ only\n"
       ".venv/bin/python studies/accuracy_vs_cost/run.py --from-csv studies/accuracy_vs_cost/results/results.csv"
       " --docs\n```\n")
@@ -145,9 +145,10 @@ def write_page(rows, path):
       "sin(s_R T) 0.584385 (I) and 0.156586 (II), as Appendix B predicts.\n")
     w("**Cost**: CPU time of the run (`time.process_time`, one process and one thread, after a warm-up of "
       "kernel fits, numba compilation and FFTW plans), i.e. the wall time on an idle core. The wall time is "
-      "in the CSV too, but the runs shared 2 cores with other jobs (load average 4 to 20 during the "
-      "session), which made it 1.2 to 15 times the CPU time and noisy. Even the CPU times carry +-20 % "
-      "(cache contention).\n")
+      "in the CSV too: with the study alone on the machine it matches the CPU time (median ratio 1.00, "
+      "0.5 to 1.4 over the runs longer than 0.05 s); runs that shared the 2 cores with other jobs made it "
+      "1.2 to 15 times the CPU time. Even the CPU times carry +-20 % (cache contention from the host's "
+      "other guests).\n")
 
     w("## What the front shows\n")
     w("### Lamb's problem\n")
@@ -211,10 +212,10 @@ def write_page(rows, path):
 
 
 LAMB_TEXT = """\
-- **The front is the exponential engine at beta = 0.5**: the paper's displacement scheme at every grid
-  size, and the product scheme at n = 64 (0.025 for 0.24 s, between the displacement scheme's 0.044 at
-  n = 64 and 0.010 at n = 128) and at n = 256, where it is the most accurate run (0.0029 against 0.0037,
-  for 2.3 times the CPU). Refining the grid is what buys accuracy: displacement scheme, beta = 0.5,
+- **The front is the exponential engine**: the paper's displacement scheme at beta = 0.5 at every grid
+  size (and at beta = 0.25 for n = 32, the cheapest run), and the product scheme at n = 256, where it is
+  the most accurate run (0.0029 against 0.0037, for 3.6 times the CPU; at n = 64 its 0.025 now costs
+  more than the displacement scheme's 0.010 at n = 128). Refining the grid is what buys accuracy: displacement scheme, beta = 0.5,
   rms error 0.085, 0.044, 0.010, 0.0037 of the static value for n = 32, 64, 128, 256.
 - **Smaller beta is not more accurate here**: at beta = 0.25 the error is larger (displacement: 0.067
   against 0.044 at n = 64, 0.0118 against 0.0037 at n = 256; product at n = 256: 0.0059 against 0.0029)
@@ -222,11 +223,11 @@ LAMB_TEXT = """\
   ringing of the Rayleigh pulse (the load's flat spectrum), which the schemes' damping at the larger
   gamma smooths; this problem measures the spatial error more than the time integration.
 - **Engine.** Same scheme and grid: the exponential engine reproduces the direct engine's error (relative
-  difference 1e-6 to 2e-4; 4e-4 at n = 256, beta = 0.25) and is 2.3 to 3.7 times cheaper at beta = 0.5
-  with the displacement scheme, 1.4 and 3.5 times at beta = 0.25 for n = 128 and 256, and 2 to 17 times
-  with the product scheme (17 at beta = 0.5, n = 64 and 128: its direct engine evaluates the product
-  weights from Z).
-  On the smallest, shortest runs (n <= 64, beta = 0.25) fixed costs make it slower (0.6 to 0.7). The
+  difference 1e-6 to 2e-4; 4e-4 at n = 256, beta = 0.25) and is 1.9 to 5.6 times cheaper at beta = 0.5
+  with the displacement scheme, 1.5 to 9.8 times at beta = 0.25, and 4.4 to 22 times with the product
+  scheme (14 and 22 at beta = 0.5, n = 64 and 128: its direct engine evaluates the product weights
+  from Z).
+  On the smallest, shortest run (velocity scheme, n = 32) the two cost the same (0.97). The
   direct runs of the product scheme at n = 256 and of the velocity scheme at n = 256 (~3.2 GB) were
   left out.
 - **The velocity formulation** must run at beta <= 0.0765 (its mode I limit), 7 times the steps of
@@ -235,7 +236,7 @@ LAMB_TEXT = """\
   shortest waves; at n = 128, T_cut = 50 raises it by 28 to 43 % (T_cut = 100: 1.5 %). It never saves
   time: the direct engine with a window allocates and tabulates its whole window, ceil(T_cut/gamma_min) + 1
   slots for every mode (gamma_min = 2 pi c_s dt), before the first step, which here is longer than the
-  run: 1.6 to 48 times the CPU of the untruncated run, and 6.5 to 92 GB at n = 256 (left out).
+  run: 1.9 to 26 times the CPU of the untruncated run, and 6.5 to 92 GB at n = 256 (left out).
 """
 
 MODAL_TEXT = """\
@@ -247,7 +248,7 @@ MODAL_TEXT = """\
   below), 70 to 6e4 times (T_cut = 50) and 1.7 to 2e3 times (T_cut = 100) in mode II; in mode III it is
   of order 1 of the J0 envelope (the T^-1/2 tail is the memory). This is far from the 3 % to 30 %
   quoted for the peers in issue 3: a hard cut of the kernel, as `Numerics(window=...)` does, is unusable
-  for long runs here. It saves about 30 % of the CPU of these one-mode runs. Truncated runs reach the
+  for long runs here. It saves about 20 to 30 % of the CPU of these one-mode runs (median). Truncated runs reach the
   front only at the inaccurate end, and in mode I at gamma = 0.2, where the growth due to truncation
   happens to offset the damping of the displacement scheme at the 50th period (error 0.11 against 0.15
   untruncated): a coincidence of one period, not accuracy.
@@ -272,9 +273,10 @@ CAVEATS = """\
 - The Lamb error mixes space and time discretisation; at the grids that fit here the spatial error of the
   point load dominates, so this problem says little about the time integration. The single mode isolates it.
 - The product scheme's direct engine spends most of its time evaluating Z for the product weights; with
-  the exponential engine (product rule added during this session) it is on the Lamb front.
+  the exponential engine (which has the product rule) it is on the Lamb front at n = 256.
 - The windowed direct engine allocates its whole window up front; a ring buffer of min(window, steps)
   slots would make truncation as cheap as it should be (it would still be inaccurate, see above).
-- The exponential engine is being made faster; its points will move left. Re-run the study to update
-  (these numbers: the engines as of commit 01c5aa2 plus the working tree of 07:42 UTC).
+- These numbers: the engines as of commit 5fab240 (a later session's rerun; the errors are the same
+  to the digits shown, the CPU times moved left). Re-run the study to update; the prose above quotes
+  the tables and is checked by hand.
 """
