@@ -186,8 +186,11 @@ def long_run(tmp_path_factory):
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err.decode()[-2000:]
     ref = xr.open_zarr(d / "ref.zarr", consolidated=False).load()
-    # the same physics in process, to round-off
-    assert_same(ref, cracklab.simulate(scene).load(), rtol=1e-12)
+    # the same physics in process, to round-off (fields of order 1 or below: tractions that
+    # are zero at broken points carry round-off of 1e-16 there)
+    res = cracklab.simulate(scene).load()
+    for name in ref.data_vars:
+        np.testing.assert_allclose(res[name].values, ref[name].values, rtol=0, atol=1e-12, err_msg=name)
     return scene, toml, ref
 
 
