@@ -53,6 +53,7 @@ class Stepper:
         self.scene = scene
         grid, comps = scene.grid, scene.components
         self.comps = comps          # scene.components tests the load fields: once, not every step
+        self._area_width = _cell_area_and_width(grid)  # for the crack length of constant-K loading
         if response is None:
             response = Response.for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
         self.response = response
@@ -104,7 +105,7 @@ class Stepper:
         eta = {c: mat.eta(c) for c in comps}
         velocity = scene.formulation == "velocity"
         product = scene.formulation == "product"
-        area, width = _cell_area_and_width(grid)
+        area, width = self._area_width
         lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
         # the product scheme's trial slips, where the law (or contact) reads the slip
         trial_slips = product and reads_slip(law, comps)
@@ -161,7 +162,7 @@ class Stepper:
         n - 1), the initial crack length of constant-K loading at the first step; returns
         the crack length, the strength and the load terms that step (v) takes."""
         scene, law, lstate = self.scene, self.scene.law, self.lstate
-        area, width = _cell_area_and_width(scene.grid)
+        area, width = self._area_width
         law.update(lstate, trial, scene.dt, v if n > 0 else None, t, tau if n > 0 else None)
         load, l0 = self.load, self.l0
         if load.constant_K and l0 is None:
