@@ -28,7 +28,7 @@ def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads
     comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
     numerics = Numerics(engine=engine, fft_threads=int(threads),
                         engine_threads=None if engine_threads is None else int(engine_threads))
-    beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps)
+    beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps, nu=0.25)
     dt = beta * grid.dx_min
     return Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=grid, law=TractionFree(),
                  loading=Loading(**load), t_end=nsteps * dt * (1 - 1e-9), beta=beta,

@@ -12,12 +12,13 @@ from .laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
 from .record import Record
-from .stability import beta_max, modes_of
+from .stability import beta_max, gamma_limit
 
 FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
 MAX_FFT_THREADS = 1024
 MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before any work
 MAX_SNAPSHOTS = 10**7
+DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
 
 
 def resolve_formulation(formulation: str, components) -> str:
@@ -26,6 +27,14 @@ def resolve_formulation(formulation: str, components) -> str:
     if formulation != "auto":
         return formulation
     return "product" if any(c in (1, 3) for c in components) else "displacement"
+
+
+def _floor4(x: float) -> float:
+    """x rounded down to 4 significant digits (a limit quoted so that it can be used as is)."""
+    if not (np.isfinite(x) and x > 0):
+        return x
+    d = 10.0 ** (np.floor(np.log10(x)) - 3)
+    return float(np.floor(x / d) * d)
 
 
 def _check_threads(name, value, alternative=""):
@@ -97,7 +106,7 @@ class Scene:
     law: object
     loading: Loading
     t_end: float
-    beta: float = 0.5
+    beta: float | None = None
     record: Record = field(default_factory=Record)
     numerics: Numerics = field(default_factory=Numerics)
     units: dict = field(default_factory=lambda: {"length": "1", "time": "1", "stress": "1"})
@@ -120,7 +129,8 @@ class Scene:
             if isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(name, f"must be a number > 0, got {getattr(self, name)!r}")
         object.__setattr__(self, "t_end", check_positive("t_end", self.t_end))
-        object.__setattr__(self, "beta", check_positive("beta", self.beta))
+        if self.beta is not None:
+            object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
         active = self.components
         if not active:
@@ -133,11 +143,15 @@ class Scene:
         for c in self.loading.loaded():
             if c not in self.law.components:
                 raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}")
-        bmax = beta_max(self.grid, *self.numerics.scheme(active), active)
+        bmax = self.beta_max
+        if self.beta is None:  # the default: 0.5, or the stable limit where that is lower
+            object.__setattr__(self, "beta", min(DEFAULT_BETA, bmax))
         if self.beta > bmax:
-            raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme "
-                                     f"on this grid (modes {', '.join(modes_of(active, self.grid.plane))}), "
-                                     f"got {self.beta}")
+            g, mode = gamma_limit(self.formulation, active, self.grid.plane, self.material.nu)
+            raise InputError("beta", f"must be in (0, {_floor4(bmax):.4g}] for the {self.formulation} scheme at nu = "
+                                     f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
+                                     f"q_max c_s dt = {g:.4g}, docs/stability.md), got {self.beta!r}; "
+                                     f"without beta a scene takes min({DEFAULT_BETA}, the limit)")
         steps = self.t_end / self.dt
         if not steps <= MAX_STEPS:
             raise InputError("t_end", f"must be at most {MAX_STEPS:.0e} time steps of dt = beta min(dx1, dx3) / cs "
@@ -181,6 +195,12 @@ class Scene:
     def formulation(self) -> str:
         """The time-stepping scheme actually used (numerics.formulation with "auto" resolved)."""
         return resolve_formulation(self.numerics.formulation, self.components)
+
+    @property
+    def beta_max(self) -> float:
+        """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability)."""
+        comps = self.components
+        return beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=self.material.nu)
 
     @property
     def dt(self) -> float:

@@ -17,7 +17,7 @@ from .stability import beta_max
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 
 
-def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
+def lamb(*, n, beta=None, t_end, record=None, numerics=None):
     """Lamb's problem (section 3.2): unit square, point load P = 1 at node (n//2, n//2),
     step in time, traction-free plane without contact constraint."""
     grid = Grid(n1=n, n3=n, L1=1.0, L3=1.0)
@@ -32,7 +32,7 @@ def ellipse_mask(grid, a, b, centre=(0.5, 0.5)):
     return ((x1 - centre[0]) / a) ** 2 + ((x3 - centre[1]) / b) ** 2 <= 1.0
 
 
-def elliptical_crack(*, n, a, b, p=1.0, beta=0.5, t_end, record=None, numerics=None):
+def elliptical_crack(*, n, a, b, p=1.0, beta=None, t_end, record=None, numerics=None):
     """Suddenly loaded elliptical crack (section 4, Figs. 10-11): unit square, semi-axes
     a (x1) and b (x3) centred at (0.5, 0.5), faces under pressure p from t = 0; the
     plane outside the ellipse stays bonded."""
@@ -44,7 +44,7 @@ def elliptical_crack(*, n, a, b, p=1.0, beta=0.5, t_end, record=None, numerics=N
                  name="elliptical_crack")
 
 
-def periodic_cracks(*, n, c, p=1.0, mode="I", beta=0.5, t_end, record=None, numerics=None):
+def periodic_cracks(*, n, c, p=1.0, mode="I", beta=None, t_end, record=None, numerics=None):
     """Plane (2D) periodic row of cracks of half length c in the unit period, centred
     at x1 = 0.5, under a suddenly applied uniform load p (opening for mode I, slip for
     modes II and III); bonded outside the crack."""
@@ -57,7 +57,7 @@ def periodic_cracks(*, n, c, p=1.0, mode="I", beta=0.5, t_end, record=None, nume
                  numerics=numerics or Numerics(), name=f"periodic_cracks_{mode}")
 
 
-def kostrov(*, n, speed, dtau=1.0, L=1.0, beta=0.5, t_end, record=None, numerics=None):
+def kostrov(*, n, speed, dtau=1.0, L=1.0, beta=None, t_end, record=None, numerics=None):
     """Plane mode III crack forced to grow from the line x1 = L/2 at ``speed``
     (prescribed rupture; stress drop dtau, zero residual strength, each node released
     over the time the tip takes to cross 1.75 cells: among release times of 0, 1, 1.25,
@@ -118,7 +118,7 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
     numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
     if beta is None:  # at most 0.125: the rupture time converges with dt (docs/tpv3.md, "Time step")
-        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3)))
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
@@ -188,7 +188,7 @@ def _check_load(tau0, tau_c_min):
              f"plane at once; use a smaller g0_ratio or cohesive_zone (tau0 grows with sqrt(delta_c / l0))")
 
 
-def asperity_row(*, Z=1.0, n1=512, n3=256, beta=0.5, t_end=3.0, tau_c=1.0, delta_c=None,
+def asperity_row(*, Z=1.0, n1=512, n3=256, beta=None, t_end=3.0, tau_c=1.0, delta_c=None,
                  cohesive_zone=0.1, g0_ratio=1.25, l0=None, asperities=True, contrast=3.0,
                  diameter=None, n_asperities=2, centres=None, x1_asperity=0.578,
                  barrier_width=None, symmetric=True, material=None, record=None, numerics=None):
@@ -303,7 +303,7 @@ def _shape_field(g, mean, cov, distribution):
     return e * (mean / e.mean())
 
 
-def random_toughness(*, Z=1.0, n1=512, n3=256, beta=0.5, t_end=3.0, tau_c=1.0, delta_c=None,
+def random_toughness(*, Z=1.0, n1=512, n3=256, beta=None, t_end=3.0, tau_c=1.0, delta_c=None,
                      cohesive_zone=0.1, g0_ratio=1.25, l0=None, quantity="tau_c", mean=None,
                      cov=0.2, correlation_length=None, covariance="gaussian",
                      distribution="lognormal", seed=0, barrier_width=None, symmetric=True,

@@ -208,16 +208,30 @@ def markdown_tables(text: str) -> list[list[str]]:
 
 
 def test_stability_table_matches_cracklab_stability():
-    from cracklab.stability import GAMMA_MAX
+    from cracklab.stability import gamma_max
 
     text = (DOCS / "equations.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| scheme | mode I")]
     shown = {}
     for line in tab[2:]:
         cells = [c.strip() for c in line.strip("|").split("|")]
-        key = tuple(w.split()[0] for w in cells[0].split(", ")[:2])
-        shown[key] = dict(zip(("I", "II", "III"), map(float, cells[1:])))
-    assert shown == GAMMA_MAX
+        shown[cells[0].split(",")[0]] = dict(zip(("I", "II", "III"), map(float, cells[1:])))
+    assert shown == {f: {m: round(gamma_max(f, m, 0.25, measured=True), 3) for m in ("I", "II", "III")}
+                     for f in ("displacement", "velocity", "product")}
+
+
+def test_stability_nu_table_matches_cracklab_stability():
+    """The table of limits against nu in stability.md is cracklab.stability.LIMITS."""
+    from cracklab.stability import LIMITS, NU_NODES
+
+    text = (DOCS / "stability.md").read_text()
+    (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| nu |")]
+    cols = [c.strip().split() for c in tab[0].strip("|").split("|")[1:]]
+    rows = [[float(c) for c in line.strip("|").split("|")] for line in tab[2:]]
+    assert [r[0] for r in rows] == list(NU_NODES)
+    for k, (scheme, mode) in enumerate(cols, start=1):
+        # the page shows 3 decimals of the measured limit, the code keeps 4
+        assert [r[k] for r in rows] == pytest.approx(list(LIMITS[scheme][mode]), abs=6e-4), (scheme, mode)
 
 
 def test_modal_scheme_tables_match_the_study():

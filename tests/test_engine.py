@@ -78,7 +78,7 @@ def check_times(res, sc):
 def test_mode_I_single_wave_matches_modal(grid, index, formulation):
     shape, k, m = wave(grid, *index)
     q = np.hypot(k, m)
-    beta = 0.5 * beta_max(grid, formulation, SCHEMES[formulation][0], (2,))
+    beta = 0.5 * beta_max(grid, formulation, SCHEMES[formulation][0], (2,), nu=0.25)
     sc = scene(grid, Loading(tau0_2=shape), beta, fields=("v_2", "delta_2"), formulation=formulation)
     assert sc.components == (2,)
     res = simulate(sc)
@@ -100,7 +100,7 @@ def test_3d_shear_single_wave_splits_into_modes_II_and_III(loaded, formulation):
     shape, k, m = wave(GRID3, 3, 2)
     q = np.hypot(k, m)
     c, s = k / q, m / q
-    beta = min(0.05, 0.9 * beta_max(GRID3, formulation, SCHEMES[formulation][0], (1, 3)))
+    beta = min(0.05, 0.9 * beta_max(GRID3, formulation, SCHEMES[formulation][0], (1, 3), nu=0.25))
     sc = scene(GRID3, Loading(**{f"tau0_{loaded}": shape}), beta, fields=("v_1", "v_3"),
                formulation=formulation)
     assert sc.components == (1, 3)
@@ -127,7 +127,7 @@ def test_3d_shear_single_wave_splits_into_modes_II_and_III(loaded, formulation):
 @pytest.mark.parametrize("component, mode", [(1, "II"), (3, "III")])
 def test_plane_shear_single_wave_matches_modal(component, mode, formulation):
     shape, k, _ = wave(PLANE, 3, 0)
-    beta = 0.5 * beta_max(PLANE, formulation, SCHEMES[formulation][0], (component,))
+    beta = 0.5 * beta_max(PLANE, formulation, SCHEMES[formulation][0], (component,), nu=0.25)
     sc = scene(PLANE, Loading(**{f"tau0_{component}": shape}), beta, fields=(f"v_{component}",),
                formulation=formulation)
     assert sc.components == (component,)   # the plane problem does not couple II and III
@@ -149,7 +149,7 @@ def _random_field(rng, grid):
 def test_mixed_loading_is_the_sum_of_single_component_runs(grid):
     rng = np.random.default_rng(7)
     loads = {c: _random_field(rng, grid) for c in (1, 2, 3)}
-    beta = 0.8 * beta_max(grid, "displacement", "trapezoid", (1, 2, 3))
+    beta = 0.8 * beta_max(grid, "displacement", "trapezoid", (1, 2, 3), nu=0.25)
     fields = ("v_1", "v_2", "v_3", "delta_1", "delta_2", "delta_3")
     nsteps = 40
     mixed = scene(grid, Loading(tau0_1=loads[1], tau0_2=loads[2], tau0_3=loads[3]), beta,
@@ -222,7 +222,7 @@ def truncated_modal_I(gamma, nsteps, window):
 def test_history_window():
     shape, k, m = wave(GRID3, 3, 2)
     q = np.hypot(k, m)
-    beta = 0.5 * beta_max(GRID3, "displacement", "trapezoid", (2,))
+    beta = 0.5 * beta_max(GRID3, "displacement", "trapezoid", (2,), nu=0.25)
     load = Loading(tau0_2=shape)
     base = scene(GRID3, load, beta, fields=("v_2",))
     gamma = q * base.dt
@@ -246,7 +246,7 @@ def test_history_window():
 def test_linearity_doubling_the_load_doubles_delta():
     rng = np.random.default_rng(3)
     load = rng.standard_normal(GRID3.shape)
-    beta = 0.5 * beta_max(GRID3, "displacement", "trapezoid", (2,))
+    beta = 0.5 * beta_max(GRID3, "displacement", "trapezoid", (2,), nu=0.25)
     one = simulate(scene(GRID3, Loading(tau0_2=load), beta, fields=("delta_2",), nsteps=50))["delta_2"].values
     two = simulate(scene(GRID3, Loading(tau0_2=2 * load), beta, fields=("delta_2",), nsteps=50))["delta_2"].values
     assert np.max(np.abs(one)) > 0
@@ -259,7 +259,7 @@ def test_linearity_doubling_the_load_doubles_delta():
 def test_uniform_load_opens_at_the_radiation_damping_rate(grid, component, formulation):
     """q = 0 has no history term: delta = tau0 t / eta exactly, from delta(0) = 0."""
     tau0 = 0.7
-    beta = 0.5 * beta_max(grid, formulation, SCHEMES[formulation][0], (component,))
+    beta = 0.5 * beta_max(grid, formulation, SCHEMES[formulation][0], (component,), nu=0.25)
     sc = scene(grid, Loading(**{f"tau0_{component}": tau0}), beta,
                fields=(f"delta_{component}", f"v_{component}", f"tau_{component}"),
                formulation=formulation, nsteps=30)

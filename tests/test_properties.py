@@ -305,7 +305,7 @@ def test_fields_of_the_wrong_shape_name_the_grid_shape(name, draw, a, b):
 def test_beta_above_the_stable_limit_names_the_limit(name, factor):
     count("unstable beta")
     scene = BASES[name]
-    bmax = cracklab.stability.beta_max(scene.grid, *scene.numerics.scheme(scene.components), scene.components)
+    bmax = scene.beta_max
     data = copy.deepcopy(DATA[name])
     data["beta"] = bmax * factor
     out = decode(data)
