@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -12,14 +13,23 @@ from .loops import add_mean_step, add_scaled, plus_mean, plus_scaled
 from .response import Response
 from .spectral import Transforms
 
-# Exponential-growth detector: the run stops when max |v| grew by more than GROWTH_FACTOR
-# over the last GROWTH_WINDOW steps and exceeds GROWTH_BOUND times the velocity scale
-# of the load, c_s max|tau0| / mu (the slip rate a stress of the size of the load
-# radiates). A stable run stays far below: peak slip rates at rupture fronts are a few
-# times that scale.
+# Growth detectors (Stepper._check). Fast: the run stops when max |v| grew by more than
+# GROWTH_FACTOR over the last GROWTH_WINDOW steps and exceeds GROWTH_BOUND times the
+# velocity scale of the load, c_s max|tau0| / mu (the slip rate a stress of the size of
+# the load radiates; peak slip rates at rupture fronts are a few times that scale).
+# Slow: max |v| over blocks of SLOW_BLOCKS[i] steps; the run stops when the last SLOW_COUNT
+# block maxima of one block size rise one after the other by SLOW_FACTOR in all and max |v|
+# exceeds SLOW_BOUND times the velocity scale (growth of ln(10) / (16 x 25) = 0.6 % per step
+# and more within 400 steps, down to 6e-5 per step within 40 000 steps), or at once when
+# max |v| exceeds CEILING times it (a slip rate no stress of the load's size can drive).
 GROWTH_WINDOW = 50
 GROWTH_FACTOR = 1e3
 GROWTH_BOUND = 1e3
+SLOW_BLOCKS = (25, 250, 2500)
+SLOW_COUNT = 16
+SLOW_FACTOR = 10.0
+SLOW_BOUND = 100.0
+CEILING = 1e6
 
 
 @dataclass
@@ -67,6 +77,8 @@ class Stepper:
         # growth detector: max |v| of the last GROWTH_WINDOW steps, running load velocity scale
         self.vmax = np.zeros(GROWTH_WINDOW)
         self.vscale = 0.0
+        # block maxima per block size, oldest first; the last one of each row is filling
+        self.vblocks = np.zeros((len(SLOW_BLOCKS), SLOW_COUNT))
         base = max(float(np.max(np.abs(self.load.field(c)))) for c in comps)
         self._vunit = base * scene.material.cs / scene.material.mu
         if start is not None:
@@ -76,7 +88,8 @@ class Stepper:
         """Everything needed to continue after the last step taken (arrays copied)."""
         return {"n": self.n, "delta": _copy(self.delta), "v": _copy(self.v), "tau": _copy(self.tau),
                 "law": _copy(self.lstate), "l0": self.l0, "load_l0": self.load.l0,
-                "vmax": self.vmax.copy(), "vscale": self.vscale, "response": self.response.get_state()}
+                "vmax": self.vmax.copy(), "vscale": self.vscale, "vblocks": self.vblocks.copy(),
+                "response": self.response.get_state()}
 
     def set_state(self, state: dict) -> None:
         """Restore a state from :meth:`get_state` (a Stepper of the same scene)."""
@@ -90,6 +103,7 @@ class Stepper:
             self.load = dataclasses.replace(self.load, l0=state["load_l0"])
         self.vmax = np.array(state["vmax"], dtype=float)
         self.vscale = float(state["vscale"])
+        self.vblocks = np.array(state["vblocks"], dtype=float)
         self.response.set_state(state["response"])
 
     def __iter__(self):
@@ -174,7 +188,7 @@ class Stepper:
         return length, law.strength(lstate, t, scene.grid), load.terms(t, self.comps, length)
 
     def _check(self, n, t, v, g):
-        """Stop on a non-finite velocity or on exponential growth (module constants)."""
+        """Stop on a non-finite velocity or on exponential growth, fast or slow (module constants)."""
         grid = self.scene.grid
         peaks = {}
         for c, vc in v.items():
@@ -186,19 +200,42 @@ class Stepper:
         m = peaks[c]
         old = self.vmax[n % GROWTH_WINDOW] if n >= GROWTH_WINDOW else self.vmax[0]
         self.vmax[n % GROWTH_WINDOW] = m
-        if m > GROWTH_BOUND * self.vscale and m > GROWTH_FACTOR * old:
-            from .stability import beta_max
-
-            sc = self.scene
-            i, k = np.unravel_index(np.argmax(np.abs(v[c])), v[c].shape)
-            bmax = beta_max(grid, *sc.numerics.scheme(sc.components), sc.components)
+        self.vblocks[:, -1] = np.maximum(self.vblocks[:, -1], m)
+        fast = m > GROWTH_BOUND * self.vscale and m > GROWTH_FACTOR * old
+        if fast or (self.vscale > 0 and m > CEILING * self.vscale):
             grew = f"{m / old:.3g}-fold" if old > 0 else "from zero"
-            raise SimulationError(
-                f"exponential growth of v_{c} at step {n} (t = {t:g}) at node ({i}, {k}), "
-                f"x1 = {grid.x1[i]:g}, x3 = {grid.x3[k]:g}: max |v_{c}| = {m:.3g} grew {grew} over the "
-                f"last {min(n, GROWTH_WINDOW)} steps and is {m / self.vscale:.3g} times the load's velocity scale "
-                f"c_s max|tau0| / mu = {self.vscale:.3g}; the time step is unstable (beta = {sc.beta:g}, "
-                f"stable limit {bmax:.4g} for the {sc.formulation} scheme); the run was stopped")
+            self._growth(n, t, v, c, m, f"grew {grew} over the last {min(n, GROWTH_WINDOW)} steps"
+                                        + ("" if fast else f" to more than {CEILING:g} times the load's velocity "
+                                                           f"scale (a slip rate no stress of its size drives)"))
+        for blocks, size in zip(self.vblocks, SLOW_BLOCKS):
+            if (n + 1) % size:
+                continue
+            if (n + 1) // size >= SLOW_COUNT and self.vscale > 0 and m > SLOW_BOUND * self.vscale \
+                    and blocks[0] > 0 and np.all(np.diff(blocks) > 0) and blocks[-1] >= SLOW_FACTOR * blocks[0]:
+                rate = float(np.polyfit(size * np.arange(SLOW_COUNT), np.log(blocks), 1)[0])
+                gamma_m = grid.q_max() * self.scene.material.cs * self.scene.dt
+                self._growth(n, t, v, c, m, f"grew {blocks[-1] / blocks[0]:.3g}-fold over the last "
+                                            f"{size * SLOW_COUNT} steps, steadily: {100 * math.expm1(rate):.3g} % "
+                                            f"per step (e-fold in {1 / rate:.3g} steps; {rate / gamma_m:.3g} per "
+                                            f"unit T = q_max c_s t)")
+            blocks[:-1] = blocks[1:]
+            blocks[-1] = 0.0
+
+    def _growth(self, n, t, v, c, m, how):
+        """Raise the SimulationError of a growing max |v_c| = m at step n."""
+        sc, grid = self.scene, self.scene.grid
+        i, k = np.unravel_index(np.argmax(np.abs(v[c])), v[c].shape)
+        bmax = sc.beta_max
+        verdict = (f"the time step is unstable (beta = {sc.beta:g} exceeds the stable limit {bmax:.4g} of the "
+                   f"{sc.formulation} scheme at nu = {sc.material.nu:g})" if sc.beta > bmax else
+                   f"beta = {sc.beta:g} is within the stable limit {bmax:.4g} of the {sc.formulation} scheme at "
+                   f"nu = {sc.material.nu:g}, so the growth comes from the interface law or the load (a smaller "
+                   f"beta tells: a time-step instability moves with it)")
+        raise SimulationError(
+            f"exponential growth of v_{c} at step {n} (t = {t:g}) at node ({i}, {k}), "
+            f"x1 = {grid.x1[i]:g}, x3 = {grid.x3[k]:g}: max |v_{c}| = {m:.3g} {how}, and is "
+            f"{m / self.vscale:.3g} times the load's velocity scale c_s max|tau0| / mu = {self.vscale:.3g}; "
+            f"{verdict}; the run was stopped")
 
 
 def steps(scene, response=None, start=None):

@@ -254,12 +254,10 @@ def test_sigkill_inside_a_checkpoint_write(long_run, tmp_path):
 # ---------------------------------------------------------------------------- numerical faults
 def _unstable(factor=3.0, nsteps=400):
     """Plane mode I crack at ``factor`` times the stable beta (forced past the Scene's check)."""
-    from cracklab.stability import beta_max
-
     sc = cracklab.scenes.periodic_cracks(n=64, c=0.2, mode="I", beta=0.1, t_end=1.0,
                                          record=Record(fields=("delta_2", "v_2"), every=2,
                                                        stations={"tip": (0.7, 0.0)}))
-    bmax = beta_max(sc.grid, *sc.numerics.scheme(sc.components), sc.components)
+    bmax = sc.beta_max
     if factor * bmax > sc.beta:
         object.__setattr__(sc, "beta", factor * bmax)
     object.__setattr__(sc, "t_end", nsteps * sc.dt)
