@@ -187,6 +187,13 @@ def inspect(path) -> tuple[str, dict]:
         return "empty", {}
     import zarr
 
+    meta = p / "zarr.json"
+    if meta.exists():
+        try:
+            json.loads(meta.read_text())
+        except (OSError, ValueError) as exc:
+            raise StoreError(path, f"its metadata file {meta} is damaged ({exc}); the store cannot be "
+                                   f"identified or resumed: restore the file, or delete the store and run again") from None
     try:
         with warnings.catch_warnings():     # a damaged array directory is for cracklab.verify to name
             warnings.simplefilter("ignore")

@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import xarray as xr
 
 from . import __version__
 from . import checkpoint
-from .errors import InputError, SimulationError, StoreError
+from .errors import InputError, SimulationError, StoreError, StoreWarning
 from .io import scene_from_data, scene_to_json
 from .stepper import Stepper
 
@@ -304,6 +305,10 @@ def _checkpoint_policy(value):
     return (int(value) or None), None
 
 
+def _damaged(path, report, doing):
+    warnings.warn(StoreWarning(f"store {path} is damaged: {report.first()}; {doing}"), stacklevel=3)
+
+
 def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
     ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
@@ -314,7 +319,10 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     ``checkpoint_every`` N steps, or ``"60s"`` of wall time (default: every 60 s, at most 10 %
     of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
     checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a
-    complete store is returned as is. Store problems raise StoreError.
+    complete store is returned as is once every chunk of it has been read and checked
+    (``cracklab.verify``). A damaged store is not served: a complete one, or one damaged
+    before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
+    the damaged files). Store problems raise StoreError.
     """
     import time
 
@@ -332,10 +340,22 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
                     (ck is not None and ck["digest"] != rec.digest):
                 raise StoreError(path, "holds a run of a different scene; run without resume to overwrite it "
                                        "or choose another path")
+            from . import verify
+
             if attrs.get("cracklab_status") == "complete":
-                if ck is not None:          # killed after the status, before the clean-up
-                    checkpoint.remove(path)
-                return xr.open_zarr(store, consolidated=False)
+                report = verify.check_run(path)
+                if report.ok:
+                    if ck is not None:          # killed after the status, before the clean-up
+                        checkpoint.remove(path)
+                    return xr.open_zarr(store, consolidated=False)
+                _damaged(path, report, "the run is done again from the start")
+                ck = None
+            elif ck is not None:
+                report = verify.check_run(path, snapshots=int(ck["nsnap"]), final=False)
+                if not report.ok:
+                    _damaged(path, report, f"its checkpoint after step {int(ck['n'])} cannot be resumed from: "
+                                           f"the run is done again from the start")
+                    ck = None
             if ck is not None:
                 rec.restore(ck)
                 start, last = ck["stepper"], int(ck["n"])
