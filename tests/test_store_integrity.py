@@ -307,6 +307,38 @@ def test_kill_during_the_final_write_leaves_a_store_not_complete(checkpoints, tm
     assert V.verify(out).ok and not (out / ck.GROUP).exists()
 
 
+def test_a_full_disk_during_the_final_write_leaves_a_store_not_complete(tmp_path, monkeypatch, reference):
+    import errno
+
+    import zarr.storage._local as local
+
+    real = local._put
+    state = {"finishing": False, "n": 0}
+    real_finish = SIM._Recorder.finish
+
+    def finish(self, *a, **k):
+        state["finishing"] = True
+        return real_finish(self, *a, **k)
+
+    def put(path, value, exclusive=False):
+        if state["finishing"] and "/station_" in str(path):
+            state["n"] += 1
+            if state["n"] > 3:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return real(path, value, exclusive)
+
+    store = tmp_path / "run.zarr"
+    monkeypatch.setattr(SIM._Recorder, "finish", finish)
+    monkeypatch.setattr(local, "_put", put)
+    with pytest.raises(StoreError, match="no space left on device while writing the station series"):
+        cracklab.simulate(_scene(), store=store, checkpoint_every=10)
+    monkeypatch.undo()                                       # space was freed
+    assert json.loads((store / "zarr.json").read_text())["attributes"]["cracklab_status"] == "running"
+    res = cracklab.simulate(_scene(), store=store, resume=True).load()
+    _same(reference, res)
+    assert V.verify(store).ok
+
+
 def test_killed_after_the_status_before_the_clean_up(tmp_path, monkeypatch, reference):
     """A kill between the status and the removal of the checkpoint leaves a complete
     store with a checkpoint: the resume verifies it, returns it and removes the checkpoint."""
