@@ -20,6 +20,7 @@ import json
 import os
 import shutil
 import time
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -150,6 +151,17 @@ def scene_digest(scene_json: str, inputs: dict) -> str:
 
 
 # ----------------------------------------------------------------------------- the store
+def encoding(ds, skip=()) -> dict:
+    """Zarr encodings of the variables of ``ds`` (but ``skip``, already in the store): zstd,
+    then a crc32c checksum of every chunk (a changed byte raises on read instead of giving
+    wrong values)."""
+    from zarr.codecs import Crc32cCodec, ZstdCodec
+
+    skip = set(skip)
+    return {name: {"compressors": (ZstdCodec(level=0, checksum=False), Crc32cCodec())}
+            for name in ds.variables if name not in skip}
+
+
 def local_path(store):
     """The filesystem path of ``store`` (None for Zarr store objects and URLs)."""
     if isinstance(store, (str, os.PathLike)):
@@ -175,10 +187,19 @@ def inspect(path) -> tuple[str, dict]:
         return "empty", {}
     import zarr
 
+    meta = p / "zarr.json"
+    if meta.exists():
+        try:
+            json.loads(meta.read_text())
+        except (OSError, ValueError) as exc:
+            raise StoreError(path, f"its metadata file {meta} is damaged ({exc}); the store cannot be "
+                                   f"identified or resumed: restore the file, or delete the store and run again") from None
     try:
-        g = zarr.open_group(str(p), mode="r")
-        attrs = dict(g.attrs)
-        members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
+        with warnings.catch_warnings():     # a damaged array directory is for cracklab.verify to name
+            warnings.simplefilter("ignore")
+            g = zarr.open_group(str(p), mode="r")
+            attrs = dict(g.attrs)
+            members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
     except Exception:  # noqa: BLE001 - not a Zarr group
         return "other", {}
     if "cracklab_ensemble" in attrs:
@@ -225,6 +246,11 @@ def _t_arrays(g):
         yield name, arr, tuple(dims)
 
 
+def is_final_array(name: str) -> bool:
+    """True for the arrays the end of a run writes (station series, rupture time)."""
+    return name == "rupture_time" or name == "t_station" or name.startswith("station")
+
+
 def prepare_resume(path, t_all) -> None:
     """Put the store of a killed run back in shape to continue: snapshot variables at
     their full length (their values past the checkpoint are rewritten as the run goes
@@ -232,6 +258,9 @@ def prepare_resume(path, t_all) -> None:
     temporary files."""
     import zarr
 
+    for sub in Path(path).iterdir():       # by name: their metadata may be what a kill damaged
+        if sub.is_dir() and is_final_array(sub.name):
+            shutil.rmtree(sub)
     g = zarr.open_group(str(path), mode="a")
     for name, arr, dims in _t_arrays(g):
         if dims and dims[0] == "t":
@@ -239,8 +268,6 @@ def prepare_resume(path, t_all) -> None:
                 arr.resize((len(t_all),) + tuple(arr.shape[1:]))
                 if name == "t":
                     arr[:] = t_all
-        elif dims and (dims[0] in ("station", "t_station") or name == "rupture_time"):
-            del g[name]
     for tmp in Path(path).rglob("*.partial"):
         tmp.unlink(missing_ok=True)
     for tmp in (Path(path) / GROUP).glob("*.tmp"):

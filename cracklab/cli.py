@@ -87,8 +87,21 @@ def run(scene: str, output: str, progress, checkpoint_every, resume) -> None:
         raise click.ClickException(str(exc)) from None
     if progress is None:
         progress = sys.stderr.isatty()
+    import warnings
+
+    from .errors import StoreWarning
+
     try:
-        simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", StoreWarning)
+            try:
+                simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume)
+            finally:
+                for w in caught:
+                    if issubclass(w.category, StoreWarning):
+                        click.echo(f"cracklab: {w.message}", err=True)
+                    else:
+                        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
     except (SimulationError, StoreError, InputError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo(f"cracklab: wrote {output}")
@@ -150,12 +163,12 @@ def plot(store, output, kind, field, time_, member, by, x_param) -> None:
 
     from . import plot as P
     from .ensemble import open_ensemble, store_kind
-    from .errors import InputError
+    from .errors import InputError, StoreError
 
     try:
         ens = store_kind(store) == "ensemble"
         ds = open_ensemble(store) if ens else xr.open_zarr(store, consolidated=False)
-    except InputError as exc:
+    except (InputError, StoreError) as exc:
         raise click.ClickException(str(exc)) from None
     stem = Path(store.rstrip("/")).name.removesuffix(".zarr")
     parent = Path(store.rstrip("/")).parent
@@ -197,15 +210,42 @@ def plot(store, output, kind, field, time_, member, by, x_param) -> None:
 def export(store, netcdf, member) -> None:
     """Write a run or an ensemble STORE (or one --member of it) to a netCDF4 file."""
     from .ensemble import export_netcdf
-    from .errors import InputError
+    from .errors import InputError, StoreError
 
     try:
         out = export_netcdf(store, netcdf, member=member)
-    except InputError as exc:
+    except (InputError, StoreError) as exc:
         raise click.ClickException(str(exc)) from None
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"--netcdf: cannot write {netcdf}: {exc.strerror or exc}") from None
     click.echo(f"cracklab: wrote {out}")
+
+
+@main.command()
+@click.argument("store", type=click.Path(exists=True, file_okay=False))
+@click.option("--quick", is_flag=True,
+              help="Check the metadata and that every chunk is present, without reading the data "
+                   "(no checksums).")
+def verify(store, quick) -> None:
+    """Check every array of a run or an ensemble STORE: metadata, the arrays a run holds,
+    every chunk present and (unless --quick) read with its checksum.
+
+    Prints what is damaged (each file, and what to do) and exits with status 1 when
+    anything is; 0 when the store is sound (an unfinished run or incomplete members are
+    reported, and are not damage)."""
+    from .errors import StoreError
+    from .verify import verify as check
+
+    try:
+        report = check(store, read=not quick)
+    except StoreError as exc:
+        raise click.ClickException(str(exc)) from None
+    lines = report.lines()
+    click.echo(f"cracklab verify: {lines[0]}")
+    for line in lines[1:]:
+        click.echo(line)
+    if not report.ok:
+        sys.exit(1)
 
 
 @main.command()

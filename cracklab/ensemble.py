@@ -21,11 +21,14 @@ Store layout (one Zarr v3 store)::
       members/
         <id>/                    what ``cracklab.simulate(scene, store=...)`` writes, plus attrs
                                  member_id, member_params (JSON), member_swept (JSON),
-                                 status (running | complete | failed), elapsed_s, worker,
-                                 error and traceback (failed), and complete (true, written last)
+                                 status (running | complete | failed | damaged), elapsed_s,
+                                 worker, error and traceback (failed), and complete (true,
+                                 written last)
 
 Workers write their member group directly; only a small status record goes back to
-the client. A rerun skips members whose group says ``complete`` and redoes the others.
+the client. A rerun verifies the members whose group says ``complete`` (``cracklab.verify``),
+skips the sound ones and redoes the others, damaged ones included. A complete member
+that is run again is written to a hidden sibling group and swapped in whole.
 
 See docs/ensembles.md for the STUDY.toml format and examples.
 """
@@ -33,6 +36,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import functools
 import hashlib
 import importlib
@@ -41,6 +45,7 @@ import itertools
 import json
 import math
 import os
+import shutil
 import socket
 import sys
 import time
@@ -50,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, StoreError
 
 FORMAT = 1
 MEMBERS = "members"
@@ -126,6 +131,7 @@ class SweepResult:
     skipped: list = field(default_factory=list)
     failed: dict = field(default_factory=dict)      # id -> error line
     elapsed: float = 0.0
+    damaged: dict = field(default_factory=dict)     # id -> damage found in a complete member (run again)
 
     @property
     def ok(self) -> bool:
@@ -140,6 +146,8 @@ class SweepResult:
             m = by_id.get(mid)
             shown = ", ".join(f"{k}={m.params[k]!r}" for k in m.swept) if m else ""
             lines.append(f"  FAILED {mid} ({shown}): {err}")
+        for mid, problem in self.damaged.items():
+            lines.append(f"  DAMAGED {mid} (was complete; run again): {problem}")
         return "\n".join(lines)
 
 
@@ -480,6 +488,8 @@ def store_kind(store) -> str:
     s = _store_str(store)
     if "://" not in s and not Path(s).exists():
         raise InputError("store", f"{s} does not exist")
+    _check_metadata(s, Path(s) / "zarr.json" if "://" not in s else None,
+                    "restore it, or delete the store and run it again")
     try:
         root = _open_group(s, "r")
     except Exception:  # noqa: BLE001 - reported as one clear line
@@ -496,6 +506,18 @@ def store_kind(store) -> str:
         return "run"
     raise InputError("store", f"{s} is a Zarr group but not a cracklab run or ensemble store "
                               f"(no 'scene' or 'cracklab_ensemble' attribute)")
+
+
+def _check_metadata(store, meta, remedy):
+    """StoreError naming ``meta`` (a zarr.json) when it exists but does not parse."""
+    if meta is None or not meta.exists():
+        return
+    from .verify import read_json
+
+    doc, why = read_json(meta)
+    if doc is None:
+        raise StoreError(store, f"its metadata file {meta} is {why}; {remedy} (cracklab verify {store} "
+                                f"lists all damage)")
 
 
 def _check_store(store: str):
@@ -543,6 +565,14 @@ def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
         "members": ids,
         "axes": json.dumps(list(axes)),
     })
+    if "://" not in store:
+        from .verify import read_json
+
+        meta = Path(store) / MEMBERS / "zarr.json"
+        if meta.exists() and read_json(meta)[0] is None:     # damaged: the members group holds no attrs
+            meta.write_text(json.dumps({"zarr_format": 3, "node_type": "group", "attributes": {}}))
+        for left in (Path(store) / MEMBERS).glob(f".*{SWAP_TAG}*"):    # replacements of killed workers
+            shutil.rmtree(left, ignore_errors=True)
     root.require_group(MEMBERS)
     return root
 
@@ -660,6 +690,24 @@ def _is_complete(store, mid) -> bool:
     return bool(attrs and attrs.get("complete") is True)
 
 
+def _damage_of(store, member: Member):
+    """None when the complete member ``member`` is sound (every chunk read and checked,
+    ``cracklab.verify``); else a line naming the damage, after marking the member
+    damaged and incomplete (so that no reader takes it, and the sweep runs it again)."""
+    if "://" in store:
+        return None             # only local stores are verified
+    from .verify import check_member
+
+    report = check_member(store, member.id)
+    if report.ok:
+        return None
+    line = report.first()
+    with contextlib.suppress(Exception):
+        _open_group(member_path(store, member.id), "a").attrs.update(
+            {"complete": False, "status": "damaged", "error": f"damaged: {line}"})
+    return line
+
+
 def _traceback_summary(exc, limit=12) -> str:
     lines = traceback.format_exception(type(exc), exc, exc.__traceback__)
     text = "".join(lines).rstrip().splitlines()
@@ -683,30 +731,83 @@ def _record_failure(store, member: Member, error: str, tb: str, elapsed: float |
                     **({"elapsed_s": round(elapsed, 3)} if elapsed is not None else {})})
 
 
+SWAP_TAG = ".replacement-"     # members/.<id>.replacement-<token>: a complete member's new run
+
+
+def _exchange(a: str, b: str) -> bool:
+    """Swap the directories ``a`` and ``b`` in one atomic step (Linux renameat2 with
+    RENAME_EXCHANGE); False where the system or file system cannot."""
+    import ctypes
+
+    try:
+        fn = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError):
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    if fn(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+        return True
+    code = ctypes.get_errno()
+    if code in (errno.EINVAL, errno.ENOSYS, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EPERM):
+        return False
+    raise OSError(code, os.strerror(code), b)
+
+
+def _swap_in(new: str, path: str):
+    """Put the member group written at ``new`` in the place of the one at ``path``: one
+    atomic exchange of the two directories (readers see the old group or the new one,
+    each whole), then the old one is deleted. Without renameat2: two renames, between
+    which the member is briefly absent (never a mixture)."""
+    if _exchange(new, path):
+        shutil.rmtree(new, ignore_errors=True)          # now the old group
+        return
+    old = f"{new}.old"
+    os.rename(path, old)
+    os.rename(new, path)
+    shutil.rmtree(old, ignore_errors=True)
+
+
 def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
     """Worker task: build, run and write one member; mark it complete last. Never raises
-    for a member's own failure: the error goes to the member's attrs and the result."""
+    for a member's own failure: the error goes to the member's attrs and the result.
+
+    A member whose group is complete (a ``resume=False`` sweep) is replaced atomically
+    for readers: the new run is written to a hidden sibling group and swapped in when
+    complete (or failed), so that a reader never finds a group marked complete whose
+    arrays are being rewritten. Other groups (absent, failed, interrupted, damaged:
+    none marked complete) are cleared and written in place."""
     t0 = time.perf_counter()
     os.environ.setdefault("CRACKLAB_FFT_THREADS", "1")
     path = member_path(store, member.id)
     worker = f"{socket.gethostname()}:{os.getpid()}"
     meta = {"member_id": member.id, "member_params": canonical_json(member.params),
             "member_swept": json.dumps(list(member.swept)), "worker": worker}
+    target = path
     try:
         from .simulate import simulate
 
-        g = _open_group(path, "w")          # clears whatever an earlier attempt left
+        old = _member_attrs(store, member.id)
+        if old is not None and old.get("complete") is True:
+            if "://" in store:      # no rename: mark it incomplete before any array is touched
+                _open_group(path, "a").attrs.update({"complete": False, "status": "running"})
+            else:
+                target = f"{_store_str(store)}/{MEMBERS}/.{member.id}{SWAP_TAG}{os.urandom(4).hex()}"
+        g = _open_group(target, "w")          # clears whatever an earlier attempt left
         g.attrs.update({**meta, "status": "running", "complete": False})
         scene = build_scene(base, member.params, fft_threads=fft_threads)
-        simulate(scene, store=path)
-        g = _open_group(path, "a")
+        simulate(scene, store=target)
+        g = _open_group(target, "a")
         elapsed = time.perf_counter() - t0
         g.attrs.update({**meta, "status": "complete", "elapsed_s": round(elapsed, 3)})
         g.attrs.update({"complete": True})   # last: the member is complete only now
+        if target != path:
+            _swap_in(target, path)
         return {"id": member.id, "status": "complete", "elapsed": elapsed, "worker": worker}
     except Exception as exc:  # noqa: BLE001 - recorded, the sweep goes on
         elapsed = time.perf_counter() - t0
         error, tb = _error_line(exc), _traceback_summary(exc)
+        if target != path and Path(target).is_dir():
+            with contextlib.suppress(OSError):  # what this attempt wrote replaces the old run
+                _swap_in(target, path)
         _record_failure(store, member, error, tb, elapsed)
         return {"id": member.id, "status": "failed", "error": error, "traceback": tb,
                 "elapsed": elapsed, "worker": worker}
@@ -788,9 +889,19 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
     from .scene import Scene
 
     _init_store(store, spec, members, axes=list(sweep.product))
-    todo = [m for m in members if not (resume and _is_complete(store, m.id))]
+    todo, damaged = [], {}
+    for m in members:
+        if resume and _is_complete(store, m.id):
+            problem = _damage_of(store, m)
+            if problem is None:
+                continue                    # complete and sound: skipped
+            damaged[m.id] = problem         # marked incomplete: recomputed below
+        todo.append(m)
     result = SweepResult(store, members, ran=[m.id for m in todo],
-                         skipped=[m.id for m in members if m not in todo])
+                         skipped=[m.id for m in members if m not in todo], damaged=damaged)
+    if damaged and progress is not False:
+        for mid, problem in damaged.items():
+            print(f"cracklab: member {mid} is damaged ({problem}); it is run again", file=sys.stderr, flush=True)
     if progress is None:
         progress = sys.stderr.isatty()
     base = base_scene if isinstance(base_scene, Scene) else None
@@ -849,7 +960,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
     result.elapsed = time.perf_counter() - t0
     _open_group(store, "a").attrs.update({"last_run": json.dumps({
         "members": len(members), "ran": len(todo), "skipped": len(result.skipped),
-        "failed": result.failed, "elapsed_s": round(result.elapsed, 3)})})
+        "failed": result.failed, "damaged": result.damaged, "elapsed_s": round(result.elapsed, 3)})})
     return result
 
 
@@ -951,17 +1062,56 @@ def member_status(store) -> list[dict]:
         raise InputError("store", f"{store} is not a cracklab ensemble store (it is a single run)")
     root = _open_group(store, "r")
     ids = list(root.attrs.get("members", []))
-    present = sorted(root[MEMBERS].group_keys()) if MEMBERS in root else []
+    local = "://" not in store
+    if local:
+        _check_metadata(store, Path(store) / MEMBERS / "zarr.json",
+                        "rerun the sweep (cracklab sweep STUDY.toml -o STORE) to repair it")
+    try:
+        members_group = root[MEMBERS] if MEMBERS in root else None
+        if members_group is None:
+            present = []
+        elif local:         # listed by their directories: one damaged member must not hide the others
+            present = sorted(e.name for e in os.scandir(Path(store) / MEMBERS)
+                             if e.is_dir() and not e.name.startswith(".") and Path(e.path, "zarr.json").exists())
+        else:
+            present = sorted(k for k in members_group.group_keys() if not k.startswith("."))
+    except (ValueError, KeyError, OSError) as exc:
+        raise StoreError(store, f"its members group {store}/{MEMBERS} cannot be read ({exc}); rerun the sweep "
+                                f"(cracklab sweep STUDY.toml -o STORE) to repair it") from None
     order = [i for i in ids if i in set(present)] + [i for i in present if i not in set(ids)]
     out = []
     for mid in order:
-        a = dict(root[MEMBERS][mid].attrs)
-        out.append({"id": mid, "status": a.get("status", "unknown"), "complete": a.get("complete") is True,
+        try:
+            a = dict(members_group[mid].attrs)
+            entry = {"id": mid, "status": a.get("status", "unknown"), "complete": a.get("complete") is True,
                      "params": json.loads(a.get("member_params", "{}")),
                      "swept": json.loads(a.get("member_swept", "[]")),
                      "error": a.get("error"), "traceback": a.get("traceback"),
-                     "elapsed_s": a.get("elapsed_s")})
+                     "elapsed_s": a.get("elapsed_s")}
+        except (ValueError, KeyError, TypeError, OSError) as exc:     # damaged metadata: reported, never read
+            meta = f"{store}/{MEMBERS}/{mid}/zarr.json"
+            entry = {"id": mid, "status": "damaged", "complete": False, "params": {}, "swept": [],
+                     "error": f"damaged: {meta}: {UNREADABLE} ({_error_line(exc)})",
+                     "traceback": None, "elapsed_s": None}
+        out.append(entry)
     return out
+
+
+UNREADABLE = "the member's metadata cannot be read"
+
+
+def _member_damage(store, mid):
+    """None, or a StoreError for the complete member ``mid`` whose metadata or chunk
+    listing is damaged (cheap: no data is read; a changed byte raises when read)."""
+    if "://" in store:
+        return None
+    from .verify import check_member
+
+    report = check_member(store, mid, read=False)
+    if report.ok:
+        return None
+    return StoreError(store, f"member {mid} is damaged: {report.first()}; rerun the sweep (cracklab sweep "
+                             f"STUDY.toml -o STORE): it recomputes damaged members")
 
 
 def open_member(store, member: str):
@@ -969,7 +1119,21 @@ def open_member(store, member: str):
     import xarray as xr
 
     store = _store_str(store)
-    return xr.open_zarr(store, group=f"{MEMBERS}/{member}", consolidated=False)
+    attrs = _member_attrs(store, member)
+    if attrs is None and "://" not in store and (Path(store) / MEMBERS / member / "zarr.json").exists():
+        _check_metadata(store, Path(store) / MEMBERS / member / "zarr.json",
+                        "rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the member")
+    if attrs is not None and attrs.get("complete") is True:
+        err = _member_damage(store, member)
+        if err is not None:
+            raise err
+    try:
+        return xr.open_zarr(store, group=f"{MEMBERS}/{member}", consolidated=False)
+    except FileNotFoundError:
+        raise InputError("member", f"{member!r} is not a member of {store}") from None
+    except (ValueError, KeyError, OSError) as exc:
+        raise StoreError(store, f"member {member} cannot be read ({_error_line(exc)}); cracklab verify {store} "
+                                f"names the damaged files; rerun the sweep to recompute it") from None
 
 
 def _coord_values(values):
@@ -1008,6 +1172,10 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
         if missing:
             raise InputError("members", f"not in {store}: {', '.join(missing[:5])}")
         status = [by_id[m] for m in wanted]
+    unreadable = [s for s in status if s["status"] == "damaged" and UNREADABLE in str(s.get("error"))]
+    if unreadable:
+        raise StoreError(store, f"member {unreadable[0]['id']} is {unreadable[0]['error']}; rerun the sweep "
+                                f"(cracklab sweep STUDY.toml -o STORE): it recomputes damaged members")
     if complete_only:
         status = [s for s in status if s["complete"]]
     if not status:
@@ -1016,9 +1184,17 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
     swept = list(dict.fromkeys(k for s in status for k in s["swept"]))
     if len({s["params"].get("builder") for s in status}) > 1 and "builder" not in swept:
         swept.append("builder")
-    datasets, scenes, names = [], [], []
+    datasets, scenes, names, kept = [], [], [], []
     for s in status:
-        ds = open_member(store, s["id"])
+        try:
+            ds = open_member(store, s["id"])
+        except InputError:
+            if complete_only:           # replaced meanwhile (a sweep swapping it): not complete now
+                continue
+            raise
+        if complete_only and ds.attrs.get("complete") is not True:
+            continue                    # rewritten since it was listed: the group read is not complete
+        kept.append(s)
         scene_json = ds.attrs.get("scene", "{}")
         try:
             name = json.loads(scene_json).get("name", "")
@@ -1029,14 +1205,22 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
         ds = _with_input_coords(ds, scene_json)
         ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("Conventions", "source", "cracklab_version")}
         datasets.append(ds)
+    status = kept
+    if not status:
+        raise InputError("store", f"{store} holds no complete members")
     if tree:
         nodes = {"/": xr.Dataset(attrs=_ensemble_attrs(root_attrs, store))}
         for s, ds, text in zip(status, datasets, scenes):
             nodes[f"/{MEMBERS}/{s['id']}"] = ds.assign_attrs(scene=text, member_id=s["id"],
                                                              member_params=canonical_json(s["params"]))
         return xr.DataTree.from_dict(nodes)
-    ens = xr.concat(datasets, dim="member", join="outer", data_vars="all", coords="different",
-                    compat="equals", combine_attrs="drop_conflicts", fill_value=np.nan)
+    try:
+        ens = xr.concat(datasets, dim="member", join="outer", data_vars="all", coords="different",
+                        compat="equals", combine_attrs="drop_conflicts", fill_value=np.nan)
+    except (ValueError, KeyError) as exc:
+        raise StoreError(store, f"its members cannot be combined ({_error_line(exc)}); a member is probably "
+                                f"damaged: cracklab verify {store} names the files, and rerunning the sweep "
+                                f"recomputes damaged members") from None
     coords = {"member": ("member", np.array([s["id"] for s in status], dtype=object),
                          {"long_name": "ensemble member id"}),
               "scene": ("member", np.array(scenes, dtype=object),
@@ -1157,6 +1341,20 @@ def netcdf_ready(ds):
     return ds
 
 
+def _read_error(store, exc) -> StoreError:
+    """A StoreError naming the damaged files of ``store`` (found by ``cracklab.verify``)
+    for an error met while reading its data."""
+    if "://" not in store:
+        from .verify import verify
+
+        with contextlib.suppress(Exception):
+            report = verify(store)
+            if not report.ok:
+                return StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+    return StoreError(store, f"cannot be read ({_error_line(exc)}); cracklab verify {store} names the damaged "
+                             f"files")
+
+
 def export_netcdf(store, out, *, member=None):
     """Write a run's store, one member of an ensemble (``member`` id), or the whole
     ensemble (``open_ensemble``) to the netCDF4 file ``out``; returns its path."""
@@ -1172,8 +1370,21 @@ def export_netcdf(store, out, *, member=None):
     else:
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
-        ds = xr.open_zarr(store, consolidated=False)
-    ds = netcdf_ready(ds.load())
+        if "://" not in store:
+            from .verify import check_run
+
+            report = check_run(store, read=False)
+            if not report.ok:
+                raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+        try:
+            ds = xr.open_zarr(store, consolidated=False)
+        except (ValueError, KeyError, OSError) as exc:
+            raise _read_error(store, exc) from None
+    try:
+        ds = ds.load()
+    except (ValueError, RuntimeError, OSError) as exc:    # checksum, decompression, decoding errors
+        raise _read_error(store, exc) from None
+    ds = netcdf_ready(ds)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     ds.to_netcdf(out, engine="netcdf4", format="NETCDF4")

@@ -28,8 +28,14 @@ def check_positive(field: str, value, *, allow_zero: bool = False) -> float:
 
 class StoreError(RuntimeError):
     """A run's Zarr store cannot be used: not a cracklab store, another format, not
-    writable, disk full, nothing to resume. ``path`` names the store."""
+    writable, disk full, nothing to resume, damaged (the message names the damaged file
+    and what to do). ``path`` names the store."""
 
     def __init__(self, path, message: str):
         self.path = str(path)
         super().__init__(f"store {self.path}: {message}")
+
+
+class StoreWarning(UserWarning):
+    """A store was found damaged and is being repaired (a run redone from the start, an
+    ensemble member recomputed); the message names the damaged files."""

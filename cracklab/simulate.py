@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import xarray as xr
 
 from . import __version__
 from . import checkpoint
-from .errors import InputError, SimulationError, StoreError
+from .errors import InputError, SimulationError, StoreError, StoreWarning
 from .io import scene_from_data, scene_to_json
 from .stepper import Stepper
 
@@ -57,7 +58,10 @@ class _Recorder:
 
     A store run creates the store first at its final size (coordinates, snapshot variables
     NaN until written, the scene inputs and attrs), writes snapshots every ``flush_every``
-    and at checkpoints, and adds the station series and rupture times at the end. ``path`` is the store's local path
+    and at checkpoints, and adds the station series and rupture times at the end, then
+    (last) ``cracklab_status``. Every array is written with a crc32c checksum per chunk,
+    and every chunk of what is written is stored (NaN-only ones too), so that a missing
+    chunk is a sign of damage (``cracklab.verify``). ``path`` is the store's local path
     (None for store objects and URLs: no checkpoints)."""
 
     def __init__(self, scene, store, path=None, flush_every=8):
@@ -70,6 +74,10 @@ class _Recorder:
         comps = scene.components
         self.station_fields = [f"{k}_{c}" for k in ("delta", "v", "tau") for c in comps] + ["strength"]
         self.series = {f: np.full((scene.nsteps + 1, len(self.nodes)), np.nan) for f in self.station_fields}
+        # the arrays the end of the run writes (listed in the attrs: verification expects them)
+        self.final_arrays = ["rupture_time"] + (
+            ["station", "station_x1", "station_x3", "t_station"] + [f"station_{f}" for f in self.station_fields]
+            if self.nodes else [])
         self.rupture = np.full(grid.shape, np.nan)
         self.pending = []
         self.written = False
@@ -150,12 +158,13 @@ class _Recorder:
 
             def fresh():
                 zarr.open_group(str(self.path), mode="w").attrs.update(ds.attrs)
-                ds.to_zarr(self.store, mode="a", consolidated=False, compute=False)
+                ds.to_zarr(self.store, mode="a", consolidated=False, compute=False, write_empty_chunks=True,
+                           encoding=checkpoint.encoding(ds))
 
             self._store_op("creating the store", fresh)
         else:
             self._store_op("creating the store", ds.to_zarr, self.store, mode="w", consolidated=False,
-                           compute=False)
+                           compute=False, write_empty_chunks=True, encoding=checkpoint.encoding(ds))
         self.written = True
 
     def flush(self):
@@ -165,7 +174,7 @@ class _Recorder:
         if self.store is not None:
             i0, i1 = self.nsnap, self.nsnap + len(self.pending)
             self._store_op(f"writing the snapshots up to t = {self.pending[-1][0]:g}", ds.drop_vars(["x1", "x3"]).to_zarr,
-                           self.store, region={"t": slice(i0, i1)}, consolidated=False)
+                           self.store, region={"t": slice(i0, i1)}, consolidated=False, write_empty_chunks=True)
             self.nsnap = i1
         else:
             self.times.append(ds)
@@ -178,7 +187,7 @@ class _Recorder:
         if self.store is not None:
             out = {**self.kept_attrs, **out}
             out.update({"cracklab_run_format": checkpoint.RUN_FORMAT, "cracklab_scene_digest": self.digest,
-                        "cracklab_status": status or "running"})
+                        "cracklab_final_arrays": self.final_arrays, "cracklab_status": status or "running"})
             if self.checkpoint_step is not None and status == "running":
                 out["cracklab_checkpoint_step"] = self.checkpoint_step
         return out
@@ -205,7 +214,12 @@ class _Recorder:
         return time.perf_counter() - t0
 
     def restore(self, ck):
-        """Continue from checkpoint ``ck``: cut the store back to it, restore the series."""
+        """Continue from checkpoint ``ck``: mark the store running (before anything of it
+        is removed), cut it back to the checkpoint, restore the series."""
+        import zarr
+
+        self._store_op("preparing the store to resume",
+                       lambda: zarr.open_group(str(self.path), mode="a").attrs.update({"cracklab_status": "running"}))
         self._store_op("preparing the store to resume", checkpoint.prepare_resume, self.path, self.snapshot_times())
         self.written = True
         self.nsnap = int(ck["nsnap"])
@@ -238,11 +252,19 @@ class _Recorder:
             if self.nsnap < len(self.steps):     # a failed run: keep what was recorded
                 self._store_op("cutting the snapshots to those recorded", checkpoint.cut_snapshots,
                                self.store, self.nsnap)
-            extra.attrs = self.global_attrs("failed" if error else "complete")
-            if error:
-                extra.attrs["cracklab_error"] = str(error)
+            import zarr
+
+            group = zarr.open_group(str(self.path) if self.path is not None else self.store, mode="a")
+            extra.attrs = dict(group.attrs)       # as they are: the status comes last, below
             self._store_op("writing the station series and rupture times", extra.to_zarr, self.store,
-                           mode="a", consolidated=False)
+                           mode="a", consolidated=False, write_empty_chunks=True,
+                           encoding=checkpoint.encoding(extra, skip=group.array_keys()))
+            final = self.global_attrs("failed" if error else "complete")
+            if error:
+                final["cracklab_error"] = str(error)
+            # last: a kill or a full disk before this leaves a store that is not complete
+            self._store_op("marking the store complete" if not error else "marking the store failed",
+                           group.attrs.put, final)
             if self.path is not None:
                 checkpoint.remove(self.path)
             return xr.open_zarr(self.store, consolidated=False)
@@ -283,6 +305,10 @@ def _checkpoint_policy(value):
     return (int(value) or None), None
 
 
+def _damaged(path, report, doing):
+    warnings.warn(StoreWarning(f"store {path} is damaged: {report.first()}; {doing}"), stacklevel=3)
+
+
 def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
     ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
@@ -293,7 +319,10 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     ``checkpoint_every`` N steps, or ``"60s"`` of wall time (default: every 60 s, at most 10 %
     of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
     checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a
-    complete store is returned as is. Store problems raise StoreError.
+    complete store is returned as is once every chunk of it has been read and checked
+    (``cracklab.verify``). A damaged store is not served: a complete one, or one damaged
+    before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
+    the damaged files). Store problems raise StoreError.
     """
     import time
 
@@ -311,8 +340,22 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
                     (ck is not None and ck["digest"] != rec.digest):
                 raise StoreError(path, "holds a run of a different scene; run without resume to overwrite it "
                                        "or choose another path")
-            if ck is None and attrs.get("cracklab_status") == "complete":
-                return xr.open_zarr(store, consolidated=False)
+            from . import verify
+
+            if attrs.get("cracklab_status") == "complete":
+                report = verify.check_run(path)
+                if report.ok:
+                    if ck is not None:          # killed after the status, before the clean-up
+                        checkpoint.remove(path)
+                    return xr.open_zarr(store, consolidated=False)
+                _damaged(path, report, "the run is done again from the start")
+                ck = None
+            elif ck is not None:
+                report = verify.check_run(path, snapshots=int(ck["nsnap"]), final=False)
+                if not report.ok:
+                    _damaged(path, report, f"its checkpoint after step {int(ck['n'])} cannot be resumed from: "
+                                           f"the run is done again from the start")
+                    ck = None
             if ck is not None:
                 rec.restore(ck)
                 start, last = ck["stepper"], int(ck["n"])
