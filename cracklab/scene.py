@@ -29,14 +29,6 @@ def resolve_formulation(formulation: str, components) -> str:
     return "product" if any(c in (1, 3) for c in components) else "displacement"
 
 
-def _floor4(x: float) -> float:
-    """x rounded down to 4 significant digits (a limit quoted so that it can be used as is)."""
-    if not (np.isfinite(x) and x > 0):
-        return x
-    d = 10.0 ** (np.floor(np.log10(x)) - 3)
-    return float(np.floor(x / d) * d)
-
-
 def _check_threads(name, value, alternative=""):
     """A thread count: an integer in [1, MAX_FFT_THREADS]."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= MAX_FFT_THREADS:
@@ -148,7 +140,7 @@ class Scene:
             object.__setattr__(self, "beta", min(DEFAULT_BETA, bmax))
         if self.beta > bmax:
             g, mode = gamma_limit(self.formulation, active, self.grid.plane, self.material.nu)
-            raise InputError("beta", f"must be in (0, {_floor4(bmax):.4g}] for the {self.formulation} scheme at nu = "
+            raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme at nu = "
                                      f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
                                      f"q_max c_s dt = {g:.4g}, docs/stability.md), got {self.beta!r}; "
                                      f"without beta a scene takes min({DEFAULT_BETA}, the limit)")

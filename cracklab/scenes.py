@@ -17,7 +17,7 @@ from .stability import beta_max
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 
 
-def lamb(*, n, beta=None, t_end, record=None, numerics=None):
+def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
     """Lamb's problem (section 3.2): unit square, point load P = 1 at node (n//2, n//2),
     step in time, traction-free plane without contact constraint."""
     grid = Grid(n1=n, n3=n, L1=1.0, L3=1.0)
@@ -32,7 +32,7 @@ def ellipse_mask(grid, a, b, centre=(0.5, 0.5)):
     return ((x1 - centre[0]) / a) ** 2 + ((x3 - centre[1]) / b) ** 2 <= 1.0
 
 
-def elliptical_crack(*, n, a, b, p=1.0, beta=None, t_end, record=None, numerics=None):
+def elliptical_crack(*, n, a, b, p=1.0, beta=0.5, t_end, record=None, numerics=None):
     """Suddenly loaded elliptical crack (section 4, Figs. 10-11): unit square, semi-axes
     a (x1) and b (x3) centred at (0.5, 0.5), faces under pressure p from t = 0; the
     plane outside the ellipse stays bonded."""
