@@ -13,17 +13,18 @@ import os as _os
 # unless the user chose otherwise; this must be set before the OpenMP runtime loads.
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
-from . import analysis, energy, ensemble, kernels, scenes  # noqa: E402
+from . import analysis, ensemble, kernels, scenes  # noqa: E402
+from .analysis import energy  # noqa: E402
 from .ensemble import open_ensemble  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
-from .grid import Grid  # noqa: E402
+from .model.grid import Grid  # noqa: E402
 from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree  # noqa: E402
-from .loading import Loading, point_load  # noqa: E402
-from .material import Material  # noqa: E402
-from .modal import modal_response  # noqa: E402
-from .record import Record  # noqa: E402
-from .scene import Numerics, Scene  # noqa: E402
-from .simulate import scene_of, simulate, stations  # noqa: E402
+from .model.loading import Loading, point_load  # noqa: E402
+from .model.material import Material  # noqa: E402
+from .analysis.modal import modal_response  # noqa: E402
+from .model.record import Record  # noqa: E402
+from .model.scene import Numerics, Scene  # noqa: E402
+from .output.simulate import scene_of, simulate, stations  # noqa: E402
 
 __all__ = [
     "Grid", "InputError", "LinearCohesive", "Loading", "Material", "Numerics", "PrescribedRupture",

@@ -1,11 +1,11 @@
 """Precision factor and long-time growth of the 12 modal schemes (section 3.1, Figs. 5-6).
 
-For each (formulation, convolution, integration) scheme of cracklab.modal.SCHEMES,
+For each (formulation, convolution, integration) scheme of cracklab.analysis.modal.SCHEMES,
 mode I (nu = 1/4), and gamma = q c_s dt in {0.5, 1, 2, 2.3}:
 
 * the precision factor of Fig. 6: largest |r| sampled in the 10th period of the
   Rayleigh oscillation over the long-time amplitude 0.5844 of Eq. (B.5)
-  (cracklab.modal.precision_factor, method "max");
+  (cracklab.analysis.modal.precision_factor, method "max");
 * the long-time growth rate per unit T, ln(max|r| over [1900, 2000] / max|r| over
   [1000, 1100]) / 900 (the window of cracklab.stability); "overflow" when the
   recurrence overflowed before T = 2000.
@@ -31,7 +31,7 @@ try:
 except ImportError:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from cracklab.modal import SCHEMES, long_time_period, modal_response, precision_factor  # noqa: E402
+from cracklab.analysis.modal import SCHEMES, long_time_period, modal_response, precision_factor  # noqa: E402
 
 MODE = "I"
 NU = 0.25
@@ -126,7 +126,7 @@ def main():
     t0 = time.perf_counter()
     pfs = {(s, g): pf(s, g) for s in SCHEMES for g in GAMMAS}
     rates = {(s, g): growth(s, g) for s in SCHEMES for g in GAMMAS}
-    print(f"Precision factor, mode I, nu = {NU}, period {PERIOD} (cracklab.modal.precision_factor):\n")
+    print(f"Precision factor, mode I, nu = {NU}, period {PERIOD} (cracklab.analysis.modal.precision_factor):\n")
     print(markdown(pfs, fmt_pf))
     print(f"\nGrowth rate of max|r| per unit T, T in {list(EARLY)} -> {list(LATE)} "
           "(negative: decays):\n")

@@ -45,7 +45,7 @@ def run_part(n, nsteps, every, fields, checkpoint_every, rss_every=100):
     import cracklab
     from cracklab import Numerics, Record
 
-    sim = importlib.import_module("cracklab.simulate")
+    sim = importlib.import_module("cracklab.output.simulate")
     dt = 0.5 / n
     scene = cracklab.scenes.elliptical_crack(
         n=n, a=0.25, b=0.2, t_end=nsteps * dt * (1 - 1e-9), numerics=Numerics(engine="exponential"),

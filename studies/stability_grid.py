@@ -1,6 +1,6 @@
 """Stability of the full-grid schemes, stress-tested: beta from 0.1 to 1.0 (docs/stability.md).
 
-The single-mode map (studies/stability_map.py) predicts, through cracklab.stability.gamma_max
+The single-mode map (studies/stability_map.py) predicts, through cracklab.solver.stability.gamma_max
 and gamma_max = q_max c_s dt = beta q_max dx (Eq. 52), the largest stable beta of each scheme.
 This study checks that prediction on the grid: a traction-free plane (unit square, 64 x 64,
 mu = c_s = 1, nu = 1/4, no contact constraint) under a suddenly applied zero-mean random load
@@ -16,7 +16,7 @@ Numerics.formulation.  One load per kernel, so that each mode is measured on its
 max |v| over the plane is sampled every 5 steps, and its growth rate is the slope of a least-squares line through log max |v|
 against the step number over the late half of the run.  It is reported per step, and per
 unit T = q c_s t of the highest mode, rate_T = rate_step / gamma_max, the unit of
-cracklab.stability.GROWTH_TOLERANCE (the growth of the fastest mode is at least this).  A run
+cracklab.solver.stability.GROWTH_TOLERANCE (the growth of the fastest mode is at least this).  A run
 is "unstable" when rate_T > GROWTH_TOLERANCE = 5e-4 or when it blows up (max |v| beyond 1e6
 times its initial value, or non-finite: the run is stopped there and the rate is fitted on
 what was run); "stable" otherwise.  The product scheme runs on 32 x 32 for 1000 steps (plane:
@@ -56,7 +56,7 @@ except ImportError:
     sys.path.insert(0, str(ROOT))
 
 from cracklab.errors import SimulationError  # noqa: E402
-from cracklab.stability import GROWTH_TOLERANCE  # noqa: E402
+from cracklab.solver.stability import GROWTH_TOLERANCE  # noqa: E402
 
 FIG = ROOT / "docs" / "figures" / "stability_grid.png"
 BETAS = (0.1, 0.25, 0.5, 0.75, 1.0)
@@ -120,7 +120,7 @@ def _force_beta(scene, beta, steps):
 
 
 def _channel_basis(grid):
-    """c = k/q and s = m/q on the spectral layout of cracklab.spectral (rfft along x3)."""
+    """c = k/q and s = m/q on the spectral layout of cracklab.solver.spectral (rfft along x3)."""
     k, m = grid.wavenumbers()
     q = np.hypot(k, m)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -152,8 +152,8 @@ def build(load, formulation, beta, steps, n=N, seed=SEED):
     """The scene of one run: n x n for loads I and shear, the plane n x 1 for II and III."""
     from cracklab import Grid, Material, Record
     from cracklab.laws import TractionFree
-    from cracklab.loading import Loading
-    from cracklab.scene import Numerics, Scene
+    from cracklab.model.loading import Loading
+    from cracklab.model.scene import Numerics, Scene
 
     plane = load in ("II", "III")
     grid = Grid(n1=n, n3=1 if plane else n, L1=1.0, L3=1.0)
@@ -186,7 +186,7 @@ def high_band(grid, frac=0.75):
 
 def run_case(args):
     """One grid run: growth rate of max |v| of the loaded kernel, and its classification."""
-    from cracklab.stepper import steps as stepper
+    from cracklab.solver.stepper import steps as stepper
 
     load, formulation, beta, nsteps, n = args
     scene = build(load, formulation, beta, nsteps, n=n)
@@ -226,9 +226,9 @@ def run_case(args):
 
 
 def predicted_beta_max(formulation, mode, grid):
-    """beta_max of cracklab.stability for this grid: gamma_max / (q_max dx_min), over the
+    """beta_max of cracklab.solver.stability for this grid: gamma_max / (q_max dx_min), over the
     modes the load exercises (II and III for "shear" in 3D)."""
-    from cracklab.stability import beta_max
+    from cracklab.solver.stability import beta_max
 
     comps = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}[mode]
     return beta_max(grid, formulation, CONVOLUTION[formulation], comps, nu=0.25)

@@ -12,8 +12,8 @@ integrated to T = 2000 and the growth rate of its envelope is measured:
 "inf" means that the recurrence overflowed.  A scheme is called stable at gamma when
 the growth is below GROWTH_TOL = 1e-5 per unit T (a factor 1.02 over T = 2000).
 
-Schemes: the 12 of section 3.1 (cracklab.modal.SCHEMES), the new product-integration
-schemes of cracklab.modal (convolution "product" / "product-cubic", integration
+Schemes: the 12 of section 3.1 (cracklab.analysis.modal.SCHEMES), the new product-integration
+schemes of cracklab.analysis.modal (convolution "product" / "product-cubic", integration
 "explicit" / "semi-implicit" / "predictor-corrector"), Heun (predictor-corrector) on the
 default displacement scheme, and three candidates that only this study implements:
 
@@ -27,7 +27,7 @@ default displacement scheme, and three candidates that only this study implement
   formulation with the exact integral of C against piecewise-linear delta.
 
 Then, for the default and the stable schemes: the error against the exact response
-(cracklab.exact.modal_exact) for T <= 10 at gamma = 0.2, 0.1, 0.05, 0.025; the
+(cracklab.analysis.exact.modal_exact) for T <= 10 at gamma = 0.2, 0.1, 0.05, 0.025; the
 precision factors of the 10th and 50th periods (method "fit"); the mode I long-time
 amplitude and period and the mode III error against J0 at gamma = 0.05; timings.
 
@@ -58,9 +58,11 @@ try:
 except ImportError:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from cracklab import exact, kernels  # noqa: E402
+from cracklab import kernels  # noqa: E402
+
+from cracklab.analysis import exact
 from cracklab.errors import InputError  # noqa: E402
-from cracklab.modal import (  # noqa: E402
+from cracklab.analysis.modal import (  # noqa: E402
     SCHEMES,
     eta_hat,
     long_time_period,

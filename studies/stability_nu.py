@@ -39,8 +39,8 @@ try:
 except ImportError:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from cracklab.modal import long_time_period, modal_response  # noqa: E402
-from cracklab.stability import GROWTH_TOLERANCE, NU_NODES, SCHEMES  # noqa: E402
+from cracklab.analysis.modal import long_time_period, modal_response  # noqa: E402
+from cracklab.solver.stability import GROWTH_TOLERANCE, NU_NODES, SCHEMES  # noqa: E402
 
 MODES = ("I", "II", "III")
 T_END = 2000.0
@@ -131,7 +131,7 @@ def figure(data, nus, path=FIG):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cracklab.stability import gamma_max
+    from cracklab.solver.stability import gamma_max
 
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
     fine = np.linspace(min(nus), max(nus), 400)
@@ -158,7 +158,7 @@ def figure(data, nus, path=FIG):
 def check_midpoints(nus=NU_NODES, T_end=T_END, jobs=2):
     """Measure the limit half-way between neighbouring nodes and compare it with the table's
     value there (the smaller node value): {scheme: {mode: [(nu, measured, table), ...]}}."""
-    from cracklab.stability import gamma_max
+    from cracklab.solver.stability import gamma_max
 
     mids = [0.5 * (a + b) for a, b in zip(nus[:-1], nus[1:])]
     tasks = [(s, m, nu, T_end) for s in SCHEMES for m in MODES[:2] for nu in mids]

@@ -7,7 +7,7 @@ import pytest
 
 import cracklab
 
-SIM = importlib.import_module("cracklab.simulate")
+SIM = importlib.import_module("cracklab.output.simulate")
 
 
 def interrupted_run(scene, store, monkeypatch, *, stop, checkpoint_every):

@@ -4,7 +4,7 @@ import pytest
 from scipy import ndimage
 
 from cracklab import InputError, Record, analysis, scenes, simulate
-from cracklab.io import scenes_equal
+from cracklab.model.scene_io import scenes_equal
 
 
 def G0(scene, l0):

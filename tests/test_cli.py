@@ -86,7 +86,7 @@ def test_bench_json():
 def test_bench_counts_the_shear_transforms():
     """The product scheme (default for shear) transforms both components forward and back
     in the predictor and again in the corrector: eight transforms per step."""
-    from cracklab.bench import run
+    from cracklab.cli.bench import run
 
     out = run(16, 16, "shear", 30, engine="exponential", engine_threads=2)
     assert out["overlap"] and out["fft_pairs_timed"] == 1
@@ -97,7 +97,7 @@ def test_bench_counts_the_shear_transforms():
 def test_bench_fit_steps_fixes_the_terms():
     """--fit-steps: runs of different lengths carry the same exponential terms (the fit
     covers the longer length), so their costs differ by the history's length alone."""
-    from cracklab.bench import run
+    from cracklab.cli.bench import run
 
     short = run(16, 16, "I", 20, engine="exponential", fit_steps=4000)
     longer = run(16, 16, "I", 200, engine="exponential", fit_steps=4000)

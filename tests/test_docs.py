@@ -208,7 +208,7 @@ def markdown_tables(text: str) -> list[list[str]]:
 
 
 def test_stability_table_matches_cracklab_stability():
-    from cracklab.stability import gamma_max
+    from cracklab.solver.stability import gamma_max
 
     text = (DOCS / "equations.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| scheme | mode I")]
@@ -221,8 +221,8 @@ def test_stability_table_matches_cracklab_stability():
 
 
 def test_stability_nu_table_matches_cracklab_stability():
-    """The table of limits against nu in stability.md is cracklab.stability.LIMITS."""
-    from cracklab.stability import LIMITS, NU_NODES
+    """The table of limits against nu in stability.md is cracklab.solver.stability.LIMITS."""
+    from cracklab.solver.stability import LIMITS, NU_NODES
 
     text = (DOCS / "stability.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| nu |")]

@@ -15,8 +15,10 @@ import pytest
 from scipy.integrate import quad
 
 import cracklab as cl
-from cracklab import energy, exact, scenes
+from cracklab import scenes
 
+from cracklab.analysis import energy
+from cracklab.analysis import exact
 FAST = cl.Numerics(engine="exponential")
 MAT = cl.Material(mu=1.0, cs=1.0, nu=0.25)
 

@@ -26,10 +26,10 @@ import pytest
 
 import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree, simulate
-from cracklab.modal import modal_response
-from cracklab.response import Response
-from cracklab.stability import beta_max
-from cracklab.weights import convolution_weights
+from cracklab.analysis.modal import modal_response
+from cracklab.solver.response import Response
+from cracklab.solver.stability import beta_max
+from cracklab.solver.weights import convolution_weights
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
 GRID3 = Grid(n1=16, n3=8, L1=1.0, L3=0.5)

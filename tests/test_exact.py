@@ -7,7 +7,7 @@ import pytest
 from scipy import integrate, linalg
 from scipy import special as sp
 
-from cracklab import exact as E
+from cracklab.analysis import exact as E
 from cracklab import kernels as K
 
 NUS = (0.2, 0.25, 0.35)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from cracklab import Grid, InputError, Material
-from cracklab.grid import is_fast_size
-from cracklab.spectral import Transforms
+from cracklab.model.grid import is_fast_size
+from cracklab.solver.spectral import Transforms
 
 
 def test_material_speeds():
@@ -95,8 +95,7 @@ def test_plans_follow_the_wisdom_file(tmp_path, monkeypatch):
     and leaves the file as it was, so a run and its resumption in another process use the
     same plan (tests/test_resume.py compares them to the bit)."""
     pyfftw = pytest.importorskip("pyfftw")
-    from cracklab import spectral
-
+    from cracklab.solver import spectral
     def entries(wisdom):  # FFTW's wisdom as sets of entries (their order varies)
         return [set(w.decode().splitlines()) for w in wisdom]
 

@@ -4,7 +4,7 @@ import pytest
 from verification import check
 
 from cracklab import Record, simulate, stations
-from cracklab.exact import lamb_arrivals, lamb_opening
+from cracklab.analysis.exact import lamb_arrivals, lamb_opening
 from cracklab.scenes import lamb
 
 N = 128

@@ -13,7 +13,7 @@ import pytest
 from cracklab import (Grid, LinearCohesive, Loading, Material, Numerics, PrescribedRupture, Record,
                       Scene, SlipWeakening, TractionFree, simulate)
 from cracklab.laws import solve_velocity
-from cracklab.response import Response
+from cracklab.solver.response import Response
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
 ETA = {c: MAT.eta(c) for c in (1, 2, 3)}

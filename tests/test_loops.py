@@ -6,8 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cracklab import loops
-
+from cracklab.solver import loops
 pytest.importorskip("numba")
 
 

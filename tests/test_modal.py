@@ -8,9 +8,11 @@ import pytest
 import scipy.special as sp
 from verification import check
 
-from cracklab import exact, kernels
+from cracklab import kernels
+
+from cracklab.analysis import exact
 from cracklab.errors import InputError
-from cracklab.modal import (
+from cracklab.analysis.modal import (
     SCHEMES,
     implicit_coefficient,
     long_time_amplitude,

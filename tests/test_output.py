@@ -274,7 +274,7 @@ BAD_STEP, BAD_NODE = 13, (5, 3)
 @pytest.fixture
 def inject_nan(monkeypatch):
     """Make step (v) return NaN at one node of one step, as a blow-up would."""
-    import cracklab.stepper as stepper
+    import cracklab.solver.stepper as stepper
 
     real = stepper.solve_velocity
     calls = {"n": 0}

@@ -190,7 +190,7 @@ def test_overlapped_runs_are_the_runs_without(case, monkeypatch):
     if X._backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
     from cracklab import simulate
-    from cracklab.stepper import Stepper
+    from cracklab.solver.stepper import Stepper
 
     sc = _scenes()[case]
     fields = list(sc.record.fields)

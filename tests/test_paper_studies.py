@@ -14,8 +14,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
 from paper import ellipse_part, lamb_part, modal_part  # noqa: E402
 
 from cracklab import Grid, Material  # noqa: E402
-from cracklab.exact import lamb_opening, penny_opening  # noqa: E402
-from cracklab.modal import long_time_amplitude, long_time_period, precision_factor  # noqa: E402
+from cracklab.analysis.exact import lamb_opening, penny_opening  # noqa: E402
+from cracklab.analysis.modal import long_time_amplitude, long_time_period, precision_factor  # noqa: E402
 from cracklab.scenes import ellipse_mask  # noqa: E402
 
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)

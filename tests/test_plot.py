@@ -7,7 +7,7 @@ from PIL import Image
 
 import cracklab
 from cracklab import ensemble as E
-from cracklab import plot as P
+from cracklab import plots as P
 from cracklab.cli import main
 
 PNG = b"\x89PNG\r\n\x1a\n"

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from cracklab import Grid, Loading, Material, Record, Scene, TractionFree, modal_response, simulate
-from cracklab.exact import periodic_row_opening
-from cracklab.scene import Numerics
+from cracklab.analysis.exact import periodic_row_opening
+from cracklab.model.scene import Numerics
 from cracklab.scenes import periodic_cracks, tpv3
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
@@ -75,7 +75,7 @@ def test_displacement_scheme_refuses_the_same_beta():
 def test_tpv3_uses_a_stable_shear_scheme():
     """tpv3 steps with the product scheme at beta = 0.125, inside its stable range (the
     rupture time at 100 m needs beta <= 0.125 for the 0.05 s of issue 5, docs/tpv3.md)."""
-    from cracklab.stability import beta_max
+    from cracklab.solver.stability import beta_max
 
     sc = tpv3(dx=1000.0, t_end=0.5)
     assert sc.formulation == "product" and sc.beta == 0.125
@@ -87,8 +87,9 @@ def test_laws_that_read_no_slip_skip_the_trial_slips(monkeypatch, law_kind):
     """A law whose update reads v, t and tau but not the slip (reads_slip = False) is
     updated once per step instead of on a copy for the predictor and again for the step:
     the run is the same to the last bit as with the trial slips and the copy."""
-    from cracklab import PrescribedRupture, SlipWeakening, stepper
+    from cracklab import PrescribedRupture, SlipWeakening
 
+    from cracklab.solver import stepper
     g = Grid(n1=32, n3=16, L1=2.0, L3=1.0)
     x1, x3 = np.meshgrid(g.x1, g.x3, indexing="ij")
     patch = (np.abs(x1 - 1.0) < 0.2) & (np.abs(x3 - 0.5) < 0.2)
@@ -112,7 +113,7 @@ def test_laws_that_read_no_slip_skip_the_trial_slips(monkeypatch, law_kind):
 
 def test_which_laws_read_the_slip():
     from cracklab import LinearCohesive, SlipWeakening
-    from cracklab.stepper import reads_slip
+    from cracklab.solver.stepper import reads_slip
 
     assert reads_slip(LinearCohesive(tau_c=1.0, delta_c=0.1), (2,))
     assert not reads_slip(SlipWeakening(mu_s=0.6, mu_d=0.5, D_c=0.01, sigma_n=1.0), (1, 3))

@@ -24,7 +24,7 @@ import cracklab
 from cracklab import (Grid, InputError, LinearCohesive, Loading, Material, Numerics, PrescribedRupture,
                       Record, Scene, SlipWeakening, TractionFree)
 from cracklab.cli import main
-from cracklab.io import _schema, scene_from_dataset, scene_from_toml, scene_to_dataset, scene_to_toml
+from cracklab.model.scene_io import _schema, scene_from_dataset, scene_from_toml, scene_to_dataset, scene_to_toml
 from cracklab.laws import LAWS
 
 # CRACKLAB_HYPOTHESIS_EXAMPLES=1000 (and CRACKLAB_HYPOTHESIS_RANDOM=1) for a longer, random search
@@ -71,7 +71,7 @@ def count(name):
 
 
 def _schema_of(data, section):
-    from cracklab.io import _classes
+    from cracklab.model.scene_io import _classes
 
     cls = LAWS[data["law"]["kind"]] if section == "law" else _classes()[section]
     schema = _schema(section, cls)
@@ -254,7 +254,7 @@ RANGES = {
     ("numerics", "engine"): (st.text(max_size=10).filter(lambda s: s not in ("auto", "direct", "exponential")),
                              "must be one of"),
     ("record", "fields"): (st.lists(st.text(max_size=8), min_size=1, max_size=3).filter(
-        lambda fs: any(f not in cracklab.record.FIELDS for f in fs)), "accepted: delta_1"),
+        lambda fs: any(f not in cracklab.model.record.FIELDS for f in fs)), "accepted: delta_1"),
 }
 
 

@@ -15,11 +15,11 @@ import xarray as xr
 
 import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree
-from cracklab import checkpoint as ck
-from cracklab.io import scene_to_toml
+from cracklab.output import checkpoint as ck
+from cracklab.model.scene_io import scene_to_toml
 from interrupt import interrupted_run
 
-SIM = importlib.import_module("cracklab.simulate")
+SIM = importlib.import_module("cracklab.output.simulate")
 ROOT = Path(__file__).resolve().parent.parent
 STATIONS = {"centre": (0.5, 0.5), "edge": (0.75, 0.5)}
 
@@ -267,7 +267,7 @@ def _unstable(factor=3.0, nsteps=400):
 def test_exponential_growth_is_stopped_before_overflow():
     sc, bmax = _unstable()
     with pytest.raises(cracklab.SimulationError) as info:
-        for _ in cracklab.stepper.steps(sc):
+        for _ in cracklab.solver.stepper.steps(sc):
             pass
     msg = str(info.value)
     assert msg.startswith("exponential growth of v_2 at step ")
@@ -307,6 +307,6 @@ def test_growth_detector_is_silent_at_the_stable_limit():
     object.__setattr__(sc, "t_end", 3000 * sc.dt)
     assert sc.nsteps == 3000
     last = None
-    for last in cracklab.stepper.steps(sc):
+    for last in cracklab.solver.stepper.steps(sc):
         pass
     assert last.n == 3000 and np.isfinite(last.v[2]).all()

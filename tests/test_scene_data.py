@@ -11,7 +11,7 @@ from click.testing import CliRunner
 from cracklab import (Grid, InputError, LinearCohesive, Loading, Material, Numerics, PrescribedRupture,
                       Record, Scene, SlipWeakening, TractionFree, scene_of, scenes, simulate)
 from cracklab.cli import main
-from cracklab.io import (scene_from_data, scene_from_dataset, scene_from_toml, scene_to_data,
+from cracklab.model.scene_io import (scene_from_data, scene_from_dataset, scene_from_toml, scene_to_data,
                          scene_to_dataset, scene_to_toml, scenes_equal)
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
@@ -337,8 +337,8 @@ def test_engine_threads_reach_the_engine_and_round_trip():
     """numerics.engine_threads sets the history engine's threads apart from the FFTs'
     (None: as fft_threads), survives the TOML round trip, and does not change the result."""
     import cracklab
-    from cracklab.io import scene_from_toml, scene_to_toml
-    from cracklab.response import Response
+    from cracklab.model.scene_io import scene_from_toml, scene_to_toml
+    from cracklab.solver.response import Response
 
     base = SCENES["traction-free"]()
     sc = base.replace(numerics=Numerics(engine="exponential", fft_threads=1, engine_threads=2))

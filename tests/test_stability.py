@@ -16,16 +16,18 @@ import pytest
 import scipy.special as sp
 from scipy import integrate
 
-from cracklab import exact, kernels
+from cracklab import kernels
+
+from cracklab.analysis import exact
 from cracklab.errors import InputError
-from cracklab.modal import (
+from cracklab.analysis.modal import (
     STABLE_SCHEME,
     implicit_coefficient,
     long_time_period,
     modal_response,
     product_weights,
 )
-from cracklab.modal import _product_tables
+from cracklab.analysis.modal import _product_tables
 
 NU = 0.25
 DEFAULT = dict(formulation="displacement", convolution="trapezoid", integration="explicit")

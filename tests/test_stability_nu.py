@@ -19,8 +19,8 @@ import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene
 from cracklab.errors import InputError, SimulationError
 from cracklab.laws import TractionFree
-from cracklab.modal import long_time_period, modal_response
-from cracklab.stability import GROWTH_TOLERANCE, SAFETY, SCHEMES, beta_max, gamma_max
+from cracklab.analysis.modal import long_time_period, modal_response
+from cracklab.solver.stability import GROWTH_TOLERANCE, SAFETY, SCHEMES, beta_max, gamma_max
 
 NUS = (0.1, 0.25, 0.3, 0.35, 0.45)
 #: the kernel that limits each scheme as a scene uses it: mode I for the displacement and
@@ -74,7 +74,7 @@ def forced(scene, beta, steps):
 
 
 def peak_history(scene):
-    return np.array([max(float(np.abs(a).max()) for a in st.v.values()) for st in cracklab.stepper.steps(scene)])
+    return np.array([max(float(np.abs(a).max()) for a in st.v.values()) for st in cracklab.solver.stepper.steps(scene)])
 
 
 @pytest.mark.parametrize("nu", NUS)

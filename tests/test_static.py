@@ -6,7 +6,7 @@ import pytest
 from verification import check
 
 from cracklab import Loading, Record, simulate
-from cracklab.exact import penny_opening, periodic_row_opening
+from cracklab.analysis.exact import penny_opening, periodic_row_opening
 from cracklab.scenes import elliptical_crack, periodic_cracks
 
 

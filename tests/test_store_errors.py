@@ -15,13 +15,13 @@ from click.testing import CliRunner
 
 import cracklab
 from cracklab import Record
-from cracklab import checkpoint as ck
+from cracklab.output import checkpoint as ck
 from cracklab.cli import main
 from cracklab.errors import StoreError
-from cracklab.io import scene_to_toml
+from cracklab.model.scene_io import scene_to_toml
 from interrupt import interrupted_run
 
-SIM = importlib.import_module("cracklab.simulate")
+SIM = importlib.import_module("cracklab.output.simulate")
 
 
 def _scene(t_end=0.5):

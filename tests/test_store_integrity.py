@@ -24,15 +24,15 @@ from click.testing import CliRunner
 
 import cracklab
 from cracklab import Record
-from cracklab import checkpoint as ck
+from cracklab.output import checkpoint as ck
 from cracklab import ensemble as E
-from cracklab import verify as V
+from cracklab.output import verify as V
 from cracklab.cli import main
 from cracklab.errors import StoreError, StoreWarning
-from cracklab.io import scene_to_toml
+from cracklab.model.scene_io import scene_to_toml
 from interrupt import interrupted_run
 
-SIM = importlib.import_module("cracklab.simulate")
+SIM = importlib.import_module("cracklab.output.simulate")
 ROOT = Path(__file__).resolve().parent.parent
 HERE = Path(__file__).resolve().parent
 
@@ -242,7 +242,7 @@ import os, signal, sys
 import zarr.storage._local as local
 import importlib
 from cracklab import cli
-S = importlib.import_module("cracklab.simulate")
+S = importlib.import_module("cracklab.output.simulate")
 
 state = {"armed": False, "n": 0}
 real_finish, real_put = S._Recorder.finish, local._put

@@ -1,7 +1,7 @@
 """Fast checks of the study helpers (studies/accuracy_vs_cost/run.py, studies/stability_grid.py)
 on cases with a known answer: the Pareto front of hand-made points, growth-rate fits of
 synthetic exponentials, the Lamb and modal error measures on perturbed exact solutions, the
-engine-driven modal recurrences against cracklab.modal.modal_response, and the stability
+engine-driven modal recurrences against cracklab.analysis.modal.modal_response, and the stability
 verdicts on hand-made rows."""
 from __future__ import annotations
 
@@ -85,7 +85,7 @@ def test_classify_and_limits():
 
 def test_predicted_beta_max_follows_gamma_max():
     from cracklab import Grid
-    from cracklab.stability import gamma_max
+    from cracklab.solver.stability import gamma_max
 
     g3 = Grid(n1=64, n3=64, L1=1.0, L3=1.0)
     g2 = Grid(n1=256, n3=1, L1=1.0, L3=1.0)
@@ -104,7 +104,7 @@ def test_forced_beta_scene_runs_past_the_check():
 
 # ----------------------------------------------------------------------------- error measures
 def test_lamb_error_of_the_exact_solution_and_of_an_offset():
-    from cracklab.exact import lamb_opening
+    from cracklab.analysis.exact import lamb_opening
 
     r = acc.LAMB_R
     t = np.linspace(0.0, 1.7 * r, 400)
@@ -140,7 +140,7 @@ def test_modal_error_mode_I_with_the_reference_fit():
     T = np.arange(48 * P, 50 * P + 0.1, 0.1)
     exact_long = acc._ref_basis(T, "I") @ ref_coef
     assert acc.modal_error(T, exact_long, "I", ref) == 0.0
-    from cracklab.modal import long_time_amplitude
+    from cracklab.analysis.modal import long_time_amplitude
 
     amp = long_time_amplitude("I")
     assert acc.modal_error(T, exact_long + 0.02, "I", ref) == pytest.approx(0.02 / amp, rel=1e-9)
@@ -152,7 +152,7 @@ def test_modal_error_mode_I_with_the_reference_fit():
     ("product", ("velocity", "product", "predictor-corrector")),
 ])
 def test_engine_modal_recurrence_matches_modal_response(formulation, scheme):
-    from cracklab.modal import modal_response
+    from cracklab.analysis.modal import modal_response
 
     for mode in ("I", "II"):
         r = acc.modal_run(mode, 0.4, formulation, "direct", 30.0)

@@ -130,9 +130,9 @@ def test_coarse_tpv3_rupture_time():
     The displacement scheme (beta = 0.049): at this resolution the product scheme's
     beta = 0.25 delays the front by another 0.35 s or more (docs/tpv3.md, "Numerics")."""
     run = _load("run")
-    from cracklab.record import Record
+    from cracklab.model.record import Record
     from cracklab.scenes import tpv3
-    from cracklab.simulate import simulate, stations
+    from cracklab.output.simulate import simulate, stations
 
     sc = tpv3(dx=600.0, t_end=4.0, domain=(48000.0, 24000.0), numerics=run.numerics("displacement"))
     sc = sc.replace(record=Record(fields=(), stations={"faultst075dp000": sc.record.stations["faultst075dp000"]}))

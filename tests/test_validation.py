@@ -4,7 +4,7 @@ import pytest
 
 from cracklab import Grid, InputError, Loading, Material, Record, Scene, TractionFree
 from cracklab import LinearCohesive, scenes
-from cracklab.io import scene_from_data, scene_to_data
+from cracklab.model.scene_io import scene_from_data, scene_to_data
 
 
 def small_scene(**changes):

@@ -1,6 +1,6 @@
 """Exponential-sum history engine: cost and memory per mode independent of the run length.
 
-The kernel K (C or Z, see :mod:`cracklab.weights`) is represented, for T = q c_s t in
+The kernel K (C or Z, see :mod:`cracklab.solver.weights`) is represented, for T = q c_s t in
 [T0, T_end], by ``K(T) ~ 2 Re sum_p c_p exp(lambda_p T)`` (conjugate pairs, Re lambda_p < 0,
 absolute error <= 1e-5 of the kernel's scale (5e-6 for mode II); :mod:`cracklab.history.fit`).
 T0 = ``ENGINE_T0`` = 4; T_end covers the run (gamma_max times its number of steps, rounded up
@@ -9,8 +9,8 @@ truncated inside the run.  For a mode with gamma = q c_s dt the weights split at
 J0 = ceil(T0 / gamma) (+1 for the product rule, whose weight w_k reaches back to (k - 1) gamma;
 rounded up to a small set of levels, and >= lag + 1):
 
-* k = j + lag < J0: the exact weights (:func:`cracklab.weights.convolution_weights`, or
-  :func:`cracklab.modal.product_weights`) against a ring buffer of the mode's recent values
+* k = j + lag < J0: the exact weights (:func:`cracklab.solver.weights.convolution_weights`, or
+  :func:`cracklab.analysis.modal.product_weights`) against a ring buffer of the mode's recent values
   ("direct taps");
 * k >= J0: the weight of the rule applied to the fitted kernel,
   ``w_k = 2 Re sum_p c_p f_p rho_p^(k - shift)`` with ``rho_p = exp(lambda_p gamma)`` and the
@@ -47,7 +47,7 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..weights import FORMULATIONS, RULES, convolution_weights
+from ..solver.weights import FORMULATIONS, RULES, convolution_weights
 from . import tables
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
@@ -128,7 +128,7 @@ def _start_factor(z):
 def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
     """The exact weights w_k (or, with part "start0", the product rule's E_0(k))."""
     if rule == "product":
-        from ..modal import product_weights
+        from ..analysis.modal import product_weights
 
         return product_weights(kernel, g, np.asarray(k, dtype=np.int64), nu=nu, order=1, part=part)
     return convolution_weights(kernel, g, k, nu=nu, rule=rule, formulation=formulation)

@@ -75,7 +75,7 @@ from pathlib import Path
 import numpy as np
 from scipy import special as sp
 
-from .. import kernels as _k
+from ..solver import kernels as _k
 
 __all__ = [
     "ExpFit",

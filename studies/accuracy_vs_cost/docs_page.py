@@ -124,7 +124,7 @@ def write_page(rows, path):
 
     w("## What is measured\n")
     w("**Lamb's problem** (`cracklab.scenes.lamb`, unit square, point load P = 1 at the centre, nu = 1/4): "
-      "the opening at a station r = 0.25 from the load against Pekeris (`cracklab.exact.lamb_opening`) for "
+      "the opening at a station r = 0.25 from the load against Pekeris (`cracklab.analysis.exact.lamb_opening`) for "
       "tau = c_s t / r <= 1.7, before the P wave of the nearest periodic image (tau = 1.73). The exact "
       "opening is singular at the Rayleigh arrival, so, as in `tests/test_lamb.py`, the windows "
       "|tau - tau_P| < 0.03, |tau - tau_S| < 0.03, |tau - tau_R| < 0.08 are left out. Error: root mean "
@@ -132,14 +132,14 @@ def write_page(rows, path):
       "(the maximum is in the table). Grids n x n with n in "
       f"{', '.join(map(str, ns))} (the station is n/4 cells from the load), beta = 0.25 and 0.5 "
       "(displacement, product) and 0.07 (velocity: its mode I limit is beta = 0.0765, "
-      "`cracklab.stability`).\n")
+      "`cracklab.solver.stability`).\n")
     w("**Single mode** (one Fourier mode, unit step load, traction-free): the recurrences of the three grid "
       "schemes, stepped through the history engines themselves (q = mu = c_s = 1; the untruncated direct runs "
-      "reproduce `cracklab.modal.modal_response` to 3e-15, checked at every full run), for "
+      "reproduce `cracklab.analysis.modal.modal_response` to 3e-15, checked at every full run), for "
       f"gamma = q c_s dt in {', '.join(f'{g:g}' for g in gammas)}. Error: max |r - r_exact| over the 50th "
       "Rayleigh period (T in [49, 50] x 2 pi / s_R; 2 pi for mode III), divided by the long-time amplitude "
       "(0.5844 mode I, 0.1566 mode II) or the J0 envelope sqrt(2/(pi T)) (mode III). r_exact: J0 for mode "
-      "III; for I and II `cracklab.exact.modal_exact` (Talbot) at 20 points of the period, interpolated by a "
+      "III; for I and II `cracklab.analysis.exact.modal_exact` (Talbot) at 20 points of the period, interpolated by a "
       "least-squares fit of the exact long-time form (Rayleigh pole plus T^-3/2 and T^-5/2 branch-point "
       "terms at frequencies 1 and c_d/c_s); fit residual 2e-12 (I) and 7e-12 (II), coefficient of "
       "sin(s_R T) 0.584385 (I) and 0.156586 (II), as Appendix B predicts.\n")

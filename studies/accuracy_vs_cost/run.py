@@ -8,7 +8,7 @@ against seconds) is drawn.
 
 Lamb (cracklab.scenes.lamb, unit square, point load P = 1 at the centre): the opening at
 a station r = 0.25 from the load is compared with the Pekeris solution
-(cracklab.exact.lamb_opening) for tau = c_s t / r <= 1.7, i.e. before the P wave of the
+(cracklab.analysis.exact.lamb_opening) for tau = c_s t / r <= 1.7, i.e. before the P wave of the
 nearest periodic image arrives (tau = 0.75/(0.25 sqrt 3) = 1.73).  The exact opening is
 singular at the Rayleigh arrival, so, as in tests/test_lamb.py, the windows
 |tau - tau_P| < 0.03, |tau - tau_S| < 0.03 and |tau - tau_R| < 0.08 are left out.
@@ -16,14 +16,14 @@ Error = root mean square of (numerical - exact) over the remaining samples, divi
 static value 3 P / (4 pi mu r) ("lamb_rms"); the maximum is reported too ("lamb_max").
 
 Modal (one Fourier mode, unit step load, traction-free, nu = 1/4): the recurrences of the
-three grid schemes (cracklab.response / cracklab.stepper with q = mu = c_s = 1) are stepped
+three grid schemes (cracklab.solver.response / cracklab.solver.stepper with q = mu = c_s = 1) are stepped
 through the history engines themselves, so that truncation and the exponential engine can
-be compared (cracklab.modal.modal_response has no engine option; the untruncated direct
+be compared (cracklab.analysis.modal.modal_response has no engine option; the untruncated direct
 runs reproduce it to round-off, checked by ``--check``).  Error = max |r - r_exact| over
 the samples of the 50th Rayleigh period T in [49 P, 50 P], P = 2 pi / s_R (2 pi for mode
 III), divided by the long-time amplitude (0.5844 for mode I, 0.1566 for mode II) or, for
 mode III, by the J0 envelope sqrt(2 / (pi T)).  r_exact is J0 for mode III; for modes I
-and II it is cracklab.exact.modal_exact (Talbot inversion, ~3 s per point at T ~ 340)
+and II it is cracklab.analysis.exact.modal_exact (Talbot inversion, ~3 s per point at T ~ 340)
 evaluated at 20 points of the window and interpolated by a least-squares fit of
 the exact asymptotic form: the Rayleigh pole, A cos(s_R T) + B sin(s_R T), plus the branch
 point terms T^-3/2 and T^-5/2 times cos/sin(T) and cos/sin(a T).  The fit residual at the
@@ -107,7 +107,7 @@ LAMB_WINDOWS = (0.03, 0.03, 0.08)
 
 def lamb_error(t, d, r=LAMB_R, P=1.0, mu=1.0, cs=1.0, tau_end=LAMB_TAU_END):
     """(rms, max) of the opening error against Pekeris away from the arrivals, / static value."""
-    from cracklab.exact import lamb_arrivals, lamb_opening
+    from cracklab.analysis.exact import lamb_arrivals, lamb_opening
 
     t = np.asarray(t, dtype=float)
     d = np.asarray(d, dtype=float)
@@ -123,7 +123,7 @@ def lamb_error(t, d, r=LAMB_R, P=1.0, mu=1.0, cs=1.0, tau_end=LAMB_TAU_END):
 
 def _lamb_scene(n, beta, formulation, engine, t_end=None):
     from cracklab import Record
-    from cracklab.scene import Numerics
+    from cracklab.model.scene import Numerics
     from cracklab.scenes import lamb
 
     eng, window = ENGINES[engine]
@@ -219,7 +219,7 @@ def lamb_warmup(ns):
 
 # ----------------------------------------------------------------------------- modal
 def rayleigh_period(mode):
-    from cracklab.modal import long_time_period
+    from cracklab.analysis.modal import long_time_period
 
     return long_time_period(mode, NU)
 
@@ -235,9 +235,9 @@ def modal_run(mode, gamma, formulation, engine, T_end):
       the predicted (V = v_{n-1}) then the corrected velocity (one pass).
     """
     from cracklab.history import make_engine
-    from cracklab.kernels import Z as Zk
-    from cracklab.kernels import eta_hat
-    from cracklab.modal import product_weights
+    from cracklab.solver.kernels import Z as Zk
+    from cracklab.solver.kernels import eta_hat
+    from cracklab.analysis.modal import product_weights
 
     eng_name, window = ENGINES[engine]
     N = int(math.ceil(T_end / gamma - 1e-9))
@@ -284,8 +284,8 @@ def modal_run(mode, gamma, formulation, engine, T_end):
 
 
 def _ref_basis(T, mode):
-    from cracklab.exact import rayleigh_speed_ratio
-    from cracklab.kernels import wave_speed_ratio
+    from cracklab.analysis.exact import rayleigh_speed_ratio
+    from cracklab.solver.kernels import wave_speed_ratio
 
     s = rayleigh_speed_ratio(NU)
     a = wave_speed_ratio(NU)
@@ -298,7 +298,7 @@ def _ref_basis(T, mode):
 
 
 def _exact_point(args):
-    from cracklab.exact import modal_exact
+    from cracklab.analysis.exact import modal_exact
 
     mode, T = args
     return float(modal_exact(mode, T, NU))
@@ -344,7 +344,7 @@ def modal_exact_window(mode, T, ref):
 
 def modal_error(T, r, mode, ref, period=50):
     """max |r - r_exact| over the samples of the given Rayleigh period, / long-time amplitude."""
-    from cracklab.modal import long_time_amplitude
+    from cracklab.analysis.modal import long_time_amplitude
 
     P = rayleigh_period(mode)
     T = np.asarray(T, dtype=float)
@@ -387,8 +387,8 @@ def modal_one(mode, gamma, formulation, engine, ref, period=50):
 
 
 def check_modal_against_modal_response():
-    """The untruncated direct runs reproduce cracklab.modal.modal_response (printed)."""
-    from cracklab.modal import modal_response
+    """The untruncated direct runs reproduce cracklab.analysis.modal.modal_response (printed)."""
+    from cracklab.analysis.modal import modal_response
 
     schemes = {"displacement": ("displacement", "trapezoid", "explicit"),
                "velocity": ("velocity", "discretized", "semi-implicit"),

@@ -26,7 +26,7 @@ def main(argv=None) -> int:
     parser.add_argument("--scheduler", default=None, help="address of a running dask scheduler")
     parser.add_argument("--workers", type=int, default=None, help="local worker processes")
     args = parser.parse_args(argv)
-    from cracklab.demo import ensemble_demo
+    from cracklab.cli.demo import ensemble_demo
 
     ok = ensemble_demo(args.out, study=STUDY, scheduler=args.scheduler, workers=args.workers)
     return 0 if ok else 1

@@ -11,7 +11,7 @@ from pathlib import Path
 import xarray as xr
 
 from cracklab import Record, scenes, simulate
-from cracklab.scene import Numerics
+from cracklab.model.scene import Numerics
 
 NUMERICS = Numerics(engine="exponential")
 

@@ -134,7 +134,7 @@ def scene(n=N, steps=STEPS, beta=BETA):
 def analyse(ds, sc):
     """Per-station comparison with Pekeris; returns (summary dict, exact series array)."""
     from cracklab import stations as station_series
-    from cracklab.exact import lamb_opening
+    from cracklab.analysis.exact import lamb_opening
 
     mat, grid = sc.material, sc.grid
     load = (grid.x1[grid.n1 // 2], grid.x3[grid.n3 // 2])
@@ -163,7 +163,7 @@ def analyse(ds, sc):
 def field_profile_error(field, sc, t):
     """Max |num - exact| / static(r) of the opening along +x1 from the load at time t, over
     8 <= r/dx <= 190 and outside the windows (WINDOW_CELLS) around the P, S and R fronts."""
-    from cracklab.exact import lamb_opening
+    from cracklab.analysis.exact import lamb_opening
 
     grid, mat = sc.grid, sc.material
     c = grid.n1 // 2
@@ -211,7 +211,7 @@ def run(n=N, steps=STEPS, store=STORE, write_docs=True, reuse=False):
 # ----------------------------------------------------------------------------- figures
 def figures(ds, sc, res):
     from cracklab import stations as station_series
-    from cracklab.exact import lamb_opening
+    from cracklab.analysis.exact import lamb_opening
 
     P = plt()
     grid = sc.grid

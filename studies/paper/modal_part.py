@@ -2,11 +2,11 @@
 
 One Fourier mode (mode I, nu = 1/4) under a unit step load on a traction-free plane;
 r(T) = V(T)/V(0+), T = q c_s t, gamma = q c_s dt. The recurrences are
-``cracklab.modal.modal_response``; the per-scheme helpers (response, precision factor
+``cracklab.analysis.modal.modal_response``; the per-scheme helpers (response, precision factor
 of the 10th period, long-time growth rate) are those of ``studies/modal_schemes.py``.
 
 * Fig. 5: r(T) of displacement / trapezoid / explicit (the paper's choice) at
-  gamma = 0.1, 1, 2 against the exact response (``cracklab.exact.modal_exact``) and
+  gamma = 0.1, 1, 2 against the exact response (``cracklab.analysis.exact.modal_exact``) and
   its long-time form 0.5844 sin(s_R T) (Eq. B.5).
 * Fig. 6: the precision factor (largest |r| in the 10th Rayleigh period over 0.5844)
   against gamma for the 12 schemes.
@@ -35,7 +35,7 @@ PF_GAMMAS = np.round(np.arange(0.05, 3.0001, 0.05), 10)
 GROWTH_GAMMAS = np.round(np.arange(0.1, 3.0001, 0.1), 10)
 BEST = (("displacement", "trapezoid", "explicit"), ("velocity", "discretized", "semi-implicit"))
 #: growth per unit T below which a scheme counts as stable: "no growth" (studies/stability_map.py)
-#: and the tolerance of cracklab.stability (less than a factor e over T = 2000)
+#: and the tolerance of cracklab.solver.stability (less than a factor e over T = 2000)
 TOLERANCES = (1e-5, 5e-4)
 PAPER_GAMMA = 2.3
 
@@ -49,7 +49,7 @@ def precision_factors(scheme, gamma, periods=(10, 50), method="max"):
     """Precision factors of ``scheme`` at ``gamma`` for the given Rayleigh periods (one run
     to the end of the last period); inf where the run overflowed."""
     from cracklab.errors import InputError
-    from cracklab.modal import long_time_period, precision_factor
+    from cracklab.analysis.modal import long_time_period, precision_factor
 
     P = long_time_period(ms.MODE, ms.NU)
     r = ms.response(scheme, gamma, max(periods) * P)
@@ -69,7 +69,7 @@ def cumtrapz_precision_factors(gamma, periods=(10, 50)):
     import xarray as xr
 
     import stability_map as sm
-    from cracklab.modal import long_time_period, precision_factor
+    from cracklab.analysis.modal import long_time_period, precision_factor
 
     P = long_time_period(ms.MODE, ms.NU)
     T, r = sm.response("cumtrapz", ms.MODE, gamma, max(periods) * P)
@@ -110,8 +110,8 @@ def beta_of_gamma_max(gamma, eta_angle=math.pi / 4):
 def run():
     import xarray as xr
 
-    from cracklab.exact import modal_exact, modal_long_time_amplitude, rayleigh_speed_ratio
-    from cracklab.modal import SCHEMES
+    from cracklab.analysis.exact import modal_exact, modal_long_time_amplitude, rayleigh_speed_ratio
+    from cracklab.analysis.modal import SCHEMES
 
     timer = Timer()
     labels = [label(s) for s in SCHEMES]
@@ -308,7 +308,7 @@ def docs(s=None):
 
 Geubelle & Rice (1995), section 3.1: one Fourier mode of a traction-free plane under a
 unit step load, r(T) = V(T)/V(0+), T = q c_s t, gamma = q c_s dt; mode I, nu = 1/4.
-The 12 schemes are `cracklab.modal.SCHEMES` (displacement or velocity formulation,
+The 12 schemes are `cracklab.analysis.modal.SCHEMES` (displacement or velocity formulation,
 discretized (45), trapezoid (46) or Simpson (47) kernel, explicit (49) or semi-implicit
 (50) update); the helpers are those of `studies/modal_schemes.py`. Reproduced with
 `studies/paper/modal_part.py`:
@@ -328,7 +328,7 @@ T = 2000 at {len(GROWTH_GAMMAS)} gammas, {sec['figures']:.0f} s figures; {s['mac
 ![Velocity response](figures/paper_modal_fig5.png)
 
 Displacement / trapezoid / explicit, against the exact response (Talbot inversion of
-Eq. 41, `cracklab.exact.modal_exact`). Largest |r - r_exact|:
+Eq. 41, `cracklab.analysis.exact.modal_exact`). Largest |r - r_exact|:
 
 {table(["gamma", "T <= 10", "40 <= T <= 60"],
        [[g, fmt(v['max_T_le_10']), fmt(v['max_T_40_60'])] for g, v in e5.items()])}
@@ -344,7 +344,7 @@ gamma = 1 and 2 it is damped (the artificial damping of the high modes) and lags
 
 Precision factor: largest |r| sampled in the 10th Rayleigh period (T from 9 to 10 times
 2 pi / s_R) over the long-time amplitude {s['amplitude']:.4f} (Eq. B.5), the paper's definition
-(`cracklab.modal.precision_factor`, method "max"); the 50th period for Fig. 7. Selected
+(`cracklab.analysis.modal.precision_factor`, method "max"); the 50th period for Fig. 7. Selected
 values (the store holds all {len(PF_GAMMAS)} gammas from 0.05 to 3, and the least-squares amplitude
 as well):
 
@@ -357,7 +357,7 @@ run to T = 2000 at gamma = 0.1, 0.2, ..., 3.0 and the growth rate of max|r| from
 T in [1000, 1100] to [1900, 2000] measured (`modal_schemes.growth`). "Stable to" is the
 largest gamma of that grid up to which the rate stays below the tolerance at every grid
 point: 1e-5 per unit T (no growth) and 5e-4 (less than a factor e over T = 2000, the
-criterion of `cracklab.stability`). "Band" is the largest gamma (0.05 grid) up to which
+criterion of `cracklab.solver.stability`). "Band" is the largest gamma (0.05 grid) up to which
 the 10th-period precision factor stays within [0.5, 1.5].
 
 ![Growth rates](figures/paper_modal_growth.png)
@@ -402,7 +402,7 @@ gamma_M = pi beta sqrt 2 = {s['gamma_M_beta_half']:.3f}; gamma = 2.3 is beta = {
   (Fig. 7: {fmt(vv['pf50']['1'])} against {fmt(vv['pf10']['1'])} at gamma = 1); with the 5e-4 tolerance it is
   stable only to gamma = {float(vv['stable_limit']['0.0005']):.1f}. Its recurrence has the same long-time
   behaviour as displacement / simpson / explicit (the two differ only in how the integral
-  of C_I is sampled; see the docstring of `cracklab.modal`), which the paper classes as
+  of C_I is sampled; see the docstring of `cracklab.analysis.modal`), which the paper classes as
   unstable. The paper's Fig. 7 shows both retained schemes "similar": here, at the 10th
   period they are within a few tens of percent of each other, but only the displacement
   scheme keeps its precision factor at the 50th period.

@@ -474,8 +474,8 @@ def uniform_speed(n1, out):
     ensemble's grid spacing, over the same advance (0.5 to 0.9 Z); the plane problem,
     which is the x3-invariant 3D one (about a second)."""
     from cracklab import analysis, scenes, simulate
-    from cracklab.record import Record
-    from cracklab.scene import Numerics
+    from cracklab.model.record import Record
+    from cracklab.model.scene import Numerics
 
     sc = scenes.random_toughness(n1=n1, n3=1, t_end=T_END, quantity="Gc", cov=0.0,
                                  numerics=Numerics(engine="exponential"), record=Record(fields=()))

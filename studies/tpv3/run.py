@@ -46,13 +46,13 @@ ENGINE = "exponential"
 
 
 def numerics(formulation=None):
-    from cracklab.scene import Numerics
+    from cracklab.model.scene import Numerics
 
     return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
 
 
 def build_scene(dx, t_end, formulation=None):
-    from cracklab.record import Record
+    from cracklab.model.record import Record
     from cracklab.scenes import tpv3
 
     base = tpv3(dx=dx, t_end=t_end, numerics=numerics(formulation))
@@ -75,7 +75,7 @@ def _complete(store, scene):
     """The store holds a finished run of this very scene."""
     import xarray as xr
 
-    from cracklab.simulate import scene_of
+    from cracklab.output.simulate import scene_of
 
     if not Path(store).exists() or not Path(store).with_suffix(".json").exists():
         return False
@@ -89,7 +89,7 @@ def _complete(store, scene):
 
 def run_one(dx, t_end, out, force=False, log=print, formulation=None):
     """Run (or reuse) one grid spacing; return its metadata dict."""
-    from cracklab.simulate import simulate
+    from cracklab.output.simulate import simulate
 
     scene = build_scene(dx, t_end, formulation)
     store = store_path(out, dx)
@@ -124,7 +124,7 @@ def run_one(dx, t_end, out, force=False, log=print, formulation=None):
 def load_run(out, dx):
     import xarray as xr
 
-    from cracklab.simulate import scene_of, stations
+    from cracklab.output.simulate import scene_of, stations
 
     ds = xr.open_zarr(store_path(out, dx), consolidated=False)
     scene = scene_of(ds)

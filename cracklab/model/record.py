@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 
 FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import StoreError
+from ..errors import StoreError
 
 RUN_FORMAT = 1          # attr ``cracklab_run_format`` of a run store
 CHECKPOINT_FORMAT = 1   # layout of the checkpoint file
@@ -195,7 +195,7 @@ def inspect(path) -> tuple[str, dict]:
             raise StoreError(path, f"its metadata file {meta} is damaged ({exc}); the store cannot be "
                                    f"identified or resumed: restore the file, or delete the store and run again") from None
     try:
-        with warnings.catch_warnings():     # a damaged array directory is for cracklab.verify to name
+        with warnings.catch_warnings():     # a damaged array directory is for cracklab.output.verify to name
             warnings.simplefilter("ignore")
             g = zarr.open_group(str(p), mode="r")
             attrs = dict(g.attrs)

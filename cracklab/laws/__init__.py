@@ -12,8 +12,8 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .errors import InputError
-from . import loops
+from ..errors import InputError
+from ..solver import loops
 
 NORMAL = (2,)
 SHEAR = (1, 3)

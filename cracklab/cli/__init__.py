@@ -27,16 +27,16 @@ def demo(out: str, scheduler, workers, no_lamb) -> None:
     """Run the demonstration: the asperity ensemble of studies/asperity_ensemble on a
     local dask cluster into OUT/ensemble.zarr with summary figures OUT/*.png, and
     Lamb's problem against Pekeris (OUT/lamb.zarr, OUT/lamb.png)."""
-    import cracklab.demo
+    import cracklab.cli.demo
 
-    ok = cracklab.demo.main(out=out, scheduler=scheduler, workers=workers, lamb=not no_lamb)
+    ok = cracklab.cli.demo.main(out=out, scheduler=scheduler, workers=workers, lamb=not no_lamb)
     if ok is False:
         sys.exit(1)
 
 
 def _load_scene(path: str):
-    from .errors import InputError
-    from .io import scene_from_data
+    from ..errors import InputError
+    from ..model.scene_io import scene_from_data
 
     if path.endswith(".toml"):
         import tomllib
@@ -49,7 +49,7 @@ def _load_scene(path: str):
         return scene_from_data(data, {})
     import xarray as xr
 
-    from .simulate import scene_of
+    from ..output.simulate import scene_of
 
     try:
         ds = xr.open_zarr(path, consolidated=False)
@@ -57,7 +57,7 @@ def _load_scene(path: str):
         raise InputError(path, f"cannot open as a scene TOML or a cracklab Zarr store: {exc}") from None
     if "scene" not in ds.attrs:
         raise InputError(path, "is a Zarr store but not a cracklab run (no 'scene' attribute)")
-    from .checkpoint import RUN_FORMAT
+    from ..output.checkpoint import RUN_FORMAT
 
     fmt = ds.attrs.get("cracklab_run_format", RUN_FORMAT)
     if not isinstance(fmt, int) or fmt > RUN_FORMAT:
@@ -78,8 +78,8 @@ def _load_scene(path: str):
                    "starts over when there is none, does nothing when OUTPUT is complete.")
 def run(scene: str, output: str, progress, checkpoint_every, resume) -> None:
     """Run SCENE (a TOML scene or the Zarr store of an earlier run) into OUTPUT."""
-    from .errors import InputError, SimulationError, StoreError
-    from .simulate import simulate
+    from ..errors import InputError, SimulationError, StoreError
+    from ..output.simulate import simulate
 
     try:
         sc = _load_scene(scene)
@@ -89,7 +89,7 @@ def run(scene: str, output: str, progress, checkpoint_every, resume) -> None:
         progress = sys.stderr.isatty()
     import warnings
 
-    from .errors import StoreWarning
+    from ..errors import StoreWarning
 
     try:
         with warnings.catch_warnings(record=True) as caught:
@@ -125,8 +125,8 @@ def sweep(study: str, output: str, scheduler, workers, resume, progress) -> None
     with their error in the member's group); a rerun redoes only what is not complete.
     A second sweep into an OUTPUT that another sweep is running into is refused
     (a lock file in the store; a lock left by a killed sweep is taken over)."""
-    from .ensemble import run_study
-    from .errors import InputError
+    from ..ensemble import run_study
+    from ..errors import InputError
 
     try:
         result = run_study(study, output, scheduler=scheduler, workers=workers, resume=resume,
@@ -161,9 +161,9 @@ def plot(store, output, kind, field, time_, member, by, x_param) -> None:
 
     import xarray as xr
 
-    from . import plot as P
-    from .ensemble import open_ensemble, store_kind
-    from .errors import InputError, StoreError
+    from .. import plots as P
+    from ..ensemble import open_ensemble, store_kind
+    from ..errors import InputError, StoreError
 
     try:
         ens = store_kind(store) == "ensemble"
@@ -209,8 +209,8 @@ def plot(store, output, kind, field, time_, member, by, x_param) -> None:
 @click.option("--member", default=None, help="Only this ensemble member (default: the whole ensemble).")
 def export(store, netcdf, member) -> None:
     """Write a run or an ensemble STORE (or one --member of it) to a netCDF4 file."""
-    from .ensemble import export_netcdf
-    from .errors import InputError, StoreError
+    from ..ensemble import export_netcdf
+    from ..errors import InputError, StoreError
 
     try:
         out = export_netcdf(store, netcdf, member=member)
@@ -233,8 +233,8 @@ def verify(store, quick) -> None:
     Prints what is damaged (each file, and what to do) and exits with status 1 when
     anything is; 0 when the store is sound (an unfinished run or incomplete members are
     reported, and are not damage)."""
-    from .errors import StoreError
-    from .verify import verify as check
+    from ..errors import StoreError
+    from ..output.verify import verify as check
 
     try:
         report = check(store, read=not quick)
@@ -268,7 +268,7 @@ def verify(store, quick) -> None:
 def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
-    from .errors import InputError
+    from ..errors import InputError
 
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),

@@ -26,7 +26,7 @@ Store layout (one Zarr v3 store)::
                                  written last)
 
 Workers write their member group directly; only a small status record goes back to
-the client. A rerun verifies the members whose group says ``complete`` (``cracklab.verify``),
+the client. A rerun verifies the members whose group says ``complete`` (``cracklab.output.verify``),
 skips the sound ones and redoes the others, damaged ones included. A complete member
 that is run again is written to a hidden sibling group and swapped in whole.
 
@@ -55,7 +55,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, StoreError
+from ..errors import InputError, StoreError
 
 FORMAT = 1
 MEMBERS = "members"
@@ -177,14 +177,14 @@ def resolve_builder(name: str):
         except ImportError as exc:
             raise InputError("builder", f"cannot import module {module!r}: {exc}") from None
     else:
-        from . import scenes as obj
+        from .. import scenes as obj
         qual = name
     for part in qual.split("."):
         obj = getattr(obj, part, None)
         if obj is None:
             break
     if not callable(obj):
-        from . import scenes
+        from .. import scenes
 
         names = sorted(n for n, f in vars(scenes).items()
                        if inspect.isfunction(f) and f.__module__ == scenes.__name__ and not n.startswith("_")
@@ -259,7 +259,7 @@ def member_id(base_key: str, params: dict) -> str:
 
 def scene_digest(scene) -> str:
     """A digest of a scene's parameters and input arrays (identifies a Scene base)."""
-    from .io import scene_to_json
+    from ..model.scene_io import scene_to_json
 
     text, arrays = scene_to_json(scene)
     h = hashlib.sha256(text.encode())
@@ -288,7 +288,7 @@ def _as_sweep(sweep) -> Sweep:
 
 def _base_of(base_scene):
     """(builder name or None, base args, base key, Scene or None)."""
-    from .scene import Scene
+    from ..model.scene import Scene
 
     if isinstance(base_scene, Scene):
         return None, {}, f"scene:{scene_digest(base_scene)}", base_scene
@@ -433,7 +433,7 @@ def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1):
     """The Scene of one member: the builder called with its arguments (or the base Scene),
     then the scene paths applied. ``fft_threads`` sets numerics.fft_threads unless the
     member sets it (None: leave it)."""
-    from .scene import Scene
+    from ..model.scene import Scene
 
     params = dict(params)
     if isinstance(base_scene, Scene):
@@ -512,7 +512,7 @@ def _check_metadata(store, meta, remedy):
     """StoreError naming ``meta`` (a zarr.json) when it exists but does not parse."""
     if meta is None or not meta.exists():
         return
-    from .verify import read_json
+    from ..output.verify import read_json
 
     doc, why = read_json(meta)
     if doc is None:
@@ -566,7 +566,7 @@ def _init_store(store: str, study_spec: dict, members: list[Member], axes=()):
         "axes": json.dumps(list(axes)),
     })
     if "://" not in store:
-        from .verify import read_json
+        from ..output.verify import read_json
 
         meta = Path(store) / MEMBERS / "zarr.json"
         if meta.exists() and read_json(meta)[0] is None:     # damaged: the members group holds no attrs
@@ -692,11 +692,11 @@ def _is_complete(store, mid) -> bool:
 
 def _damage_of(store, member: Member):
     """None when the complete member ``member`` is sound (every chunk read and checked,
-    ``cracklab.verify``); else a line naming the damage, after marking the member
+    ``cracklab.output.verify``); else a line naming the damage, after marking the member
     damaged and incomplete (so that no reader takes it, and the sweep runs it again)."""
     if "://" in store:
         return None             # only local stores are verified
-    from .verify import check_member
+    from ..output.verify import check_member
 
     report = check_member(store, member.id)
     if report.ok:
@@ -783,7 +783,7 @@ def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
             "member_swept": json.dumps(list(member.swept)), "worker": worker}
     target = path
     try:
-        from .simulate import simulate
+        from ..output.simulate import simulate
 
         old = _member_attrs(store, member.id)
         if old is not None and old.get("complete") is True:
@@ -886,7 +886,7 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
 
 def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
                 progress, fft_threads) -> SweepResult:
-    from .scene import Scene
+    from ..model.scene import Scene
 
     _init_store(store, spec, members, axes=list(sweep.product))
     todo, damaged = [], {}
@@ -965,7 +965,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
 
 
 def _spec_of(base_scene, sweep: Sweep) -> dict:
-    from .scene import Scene
+    from ..model.scene import Scene
 
     base = {"scene_digest": scene_digest(base_scene)} if isinstance(base_scene, Scene) else \
         {"builder": builder_name(base_scene.name if isinstance(base_scene, Builder) else base_scene),
@@ -1008,7 +1008,7 @@ def load_study(path) -> Study:
     """
     import tomllib
 
-    from .io import scene_from_toml
+    from ..model.scene_io import scene_from_toml
 
     path = Path(path)
     try:
@@ -1105,7 +1105,7 @@ def _member_damage(store, mid):
     listing is damaged (cheap: no data is read; a changed byte raises when read)."""
     if "://" in store:
         return None
-    from .verify import check_member
+    from ..output.verify import check_member
 
     report = check_member(store, mid, read=False)
     if report.ok:
@@ -1263,7 +1263,7 @@ def _ensemble_attrs(root_attrs, store):
 def member_scene(ens, member):
     """The Scene of one member of an ``open_ensemble`` Dataset (or of any Dataset with a
     ``scene`` attr or coordinate)."""
-    from .io import scene_from_data
+    from ..model.scene_io import scene_from_data
 
     ds = ens.sel(member=member) if "member" in ens.dims else ens
     text = ds["scene"].item() if "scene" in ds.coords else ds.attrs["scene"]
@@ -1342,10 +1342,10 @@ def netcdf_ready(ds):
 
 
 def _read_error(store, exc) -> StoreError:
-    """A StoreError naming the damaged files of ``store`` (found by ``cracklab.verify``)
+    """A StoreError naming the damaged files of ``store`` (found by ``cracklab.output.verify``)
     for an error met while reading its data."""
     if "://" not in store:
-        from .verify import verify
+        from ..output.verify import verify
 
         with contextlib.suppress(Exception):
             report = verify(store)
@@ -1371,7 +1371,7 @@ def export_netcdf(store, out, *, member=None):
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
         if "://" not in store:
-            from .verify import check_run
+            from ..output.verify import check_run
 
             report = check_run(store, read=False)
             if not report.ok:

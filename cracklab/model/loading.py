@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from ..errors import InputError, check_positive
 
 TIME_FUNCTIONS = ("step", "ramp", "smooth")
 

@@ -30,10 +30,10 @@ def lamb_demo(out="out", n=128, progress=None):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .exact import lamb_arrivals, lamb_opening
-    from .record import Record
-    from .scenes import lamb
-    from .simulate import simulate, stations
+    from ..analysis.exact import lamb_arrivals, lamb_opening
+    from ..model.record import Record
+    from ..scenes import lamb
+    from ..output.simulate import simulate, stations
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -78,8 +78,8 @@ def lamb_demo(out="out", n=128, progress=None):
 
 def ensemble_demo(out="out", *, study=STUDY, scheduler=None, workers=None, progress=None) -> bool:
     """Run ``study`` into OUT/ensemble.zarr and draw its figures; False if a member failed."""
-    from . import plot as P
-    from .ensemble import load_study, open_ensemble, run_study
+    from .. import plots as P
+    from ..ensemble import load_study, open_ensemble, run_study
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

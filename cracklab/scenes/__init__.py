@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError, check_positive
-from .grid import Grid
-from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree
-from .loading import Loading, point_load
-from .material import Material
-from .record import Record
-from .scene import Numerics, Scene
-from .stability import beta_max
+from ..errors import InputError, check_positive
+from ..model.grid import Grid
+from ..laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree
+from ..model.loading import Loading, point_load
+from ..model.material import Material
+from ..model.record import Record
+from ..model.scene import Numerics, Scene
+from ..solver.stability import beta_max
 
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 

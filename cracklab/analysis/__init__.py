@@ -27,7 +27,7 @@ __all__ = ["initial_front", "front_position", "mean_crack_length", "front_speed"
 # ---------------------------------------------------------------------------- helpers
 def _scene_of(data):
     if isinstance(data, xr.Dataset) and "scene" in data.attrs:
-        from .simulate import scene_of
+        from ..output.simulate import scene_of
 
         try:
             return scene_of(data)

@@ -336,7 +336,7 @@ def check_ensemble(store, *, read: bool = True) -> Report:
 
 def verify(store, *, read: bool = True) -> Report:
     """The ``Report`` of a run or ensemble store (a local path)."""
-    from .errors import StoreError
+    from ..errors import StoreError
 
     p = Path(os.fspath(store)).expanduser()
     if not p.is_dir():

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import SimulationError
-from .laws import solve_velocity
+from ..errors import SimulationError
+from ..laws import solve_velocity
 from .loops import add_mean_step, add_scaled, plus_mean, plus_scaled
 from .response import Response
 from .spectral import Transforms

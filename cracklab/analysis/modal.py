@@ -85,7 +85,7 @@ from itertools import product
 import numpy as np
 import xarray as xr
 
-from .errors import InputError
+from ..errors import InputError
 
 __all__ = [
     "MODES",
@@ -108,7 +108,7 @@ __all__ = [
 MODES = ("I", "II", "III")
 FORMULATIONS = ("displacement", "velocity")
 #: the paper's three convolution rules; "exact" (exactly pre-integrated kernel) is
-#: accepted as well when cracklab.weights provides it
+#: accepted as well when cracklab.solver.weights provides it
 CONVOLUTIONS = ("discretized", "trapezoid", "simpson")
 INTEGRATIONS = ("explicit", "semi-implicit")
 #: the 12 (formulation, convolution, integration) implementations of section 3.1
@@ -200,13 +200,13 @@ def eta_hat(mode: str, nu: float) -> float:
     """Radiation damping factor relative to mu/(2 c_s): a = c_d/c_s for mode I, else 1."""
     mode = _choice("mode", mode, MODES)
     nu = _poisson(nu)
-    from .kernels import eta_hat as _eta
+    from ..solver.kernels import eta_hat as _eta
 
     return float(_eta(mode, nu))
 
 
 def _weights(mode, gamma, N, nu, formulation, convolution, simpson_n):
-    from .weights import convolution_weights
+    from ..solver.weights import convolution_weights
 
     j = np.arange(N + 1)
     kwargs = dict(nu=nu, rule=convolution, formulation=formulation)
@@ -246,7 +246,7 @@ def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
     part "lag": ``W_j``; part "start0", "start1", "start2": ``E_i(n)`` at ``n = j``.
     Broadcast over ``gamma >= 0`` and integer ``j >= 0``.
     """
-    from .kernels import KERNELS
+    from ..solver.kernels import KERNELS
 
     if kernel not in KERNELS:
         raise InputError("kernel", f"must be one of {', '.join(map(repr, KERNELS))}; got {kernel!r}")
@@ -299,7 +299,7 @@ def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
 
 def _moments_at(kernel, g, c, nu):
     """M[p] = int_0^1 Z((c + 1 - u') g) u'^p du', p = 0..3, broadcast over g and c."""
-    from .kernels import Z
+    from ..solver.kernels import Z
 
     T = (np.asarray(c, dtype=float)[..., None] + 1.0 - _GLU) * np.asarray(g, dtype=float)[..., None]
     z = np.asarray(Z(kernel, T, nu), dtype=float) * _GLW
@@ -332,7 +332,7 @@ def _z_moments(mode, gamma, ncell, nu):
     Cell c of the kernel (T in [c gamma, (c+1) gamma]) is the velocity cell
     [t_k, t_{k+1}], k = n - 1 - c, at step n; u' runs forward in time on it.
     """
-    from .kernels import Z
+    from ..solver.kernels import Z
 
     T = (np.arange(ncell)[:, None] + 1.0 - _GLU[None, :]) * gamma
     z = np.asarray(Z(mode, T, nu), dtype=float) * _GLW
@@ -471,13 +471,13 @@ def _run_product(mode, gamma, N, nu, order, integration, passes):
 
 
 def _halves_last(convolution: str) -> bool:
-    from .weights import halves_last
+    from ..solver.weights import halves_last
 
     return bool(halves_last(convolution))
 
 
 def _static(mode, nu) -> float:
-    from .kernels import static_integral
+    from ..solver.kernels import static_integral
 
     return float(static_integral(mode, nu))
 
@@ -679,11 +679,11 @@ def long_time_amplitude(mode, nu=0.25) -> float:
     """Amplitude A of the long-time form r ~ A sin(s_R T) for modes I and II (Appendix B).
 
     In T and s = p/(q c_s), L[r](s) = eta / M(s) with the impedance
-    ``M(s) = eta s + L[C](s)`` (:func:`cracklab.kernels.impedance`).  The poles
+    ``M(s) = eta s + L[C](s)`` (:func:`cracklab.solver.kernels.impedance`).  The poles
     ``s = +- i s_R`` give ``r ~ 2 Re[eta e^{i s_R T} / M'(i s_R)]``; M is real on the
     imaginary axis below the branch points and ``M'(iy) = -i dM(iy)/dy``, so
     ``A = -2 eta / (dM(iy)/dy)`` at ``y = s_R``.  The value is taken from
-    :func:`cracklab.exact.modal_long_time_amplitude`: 0.5844 (mode I, eq. B.5) and
+    :func:`cracklab.analysis.exact.modal_long_time_amplitude`: 0.5844 (mode I, eq. B.5) and
     0.1566 (mode II) at nu = 1/4.  Mode III has no Rayleigh pole (r = J0(T)).
     """
     mode = _choice("mode", mode, ("I", "II"))

@@ -7,11 +7,11 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from . import __version__
+from .. import __version__
 from . import checkpoint
-from .errors import InputError, SimulationError, StoreError, StoreWarning
-from .io import scene_from_data, scene_to_json
-from .stepper import Stepper
+from ..errors import InputError, SimulationError, StoreError, StoreWarning
+from ..model.scene_io import scene_from_data, scene_to_json
+from ..solver.stepper import Stepper
 
 LONG_NAMES = {
     "delta_1": ("slip along x1", "length"), "delta_2": ("opening", "length"),
@@ -61,7 +61,7 @@ class _Recorder:
     and at checkpoints, and adds the station series and rupture times at the end, then
     (last) ``cracklab_status``. Every array is written with a crc32c checksum per chunk,
     and every chunk of what is written is stored (NaN-only ones too), so that a missing
-    chunk is a sign of damage (``cracklab.verify``). ``path`` is the store's local path
+    chunk is a sign of damage (``cracklab.output.verify``). ``path`` is the store's local path
     (None for store objects and URLs: no checkpoints)."""
 
     def __init__(self, scene, store, path=None, flush_every=8):
@@ -320,7 +320,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
     checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a
     complete store is returned as is once every chunk of it has been read and checked
-    (``cracklab.verify``). A damaged store is not served: a complete one, or one damaged
+    (``cracklab.output.verify``). A damaged store is not served: a complete one, or one damaged
     before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
     the damaged files). Store problems raise StoreError.
     """

@@ -54,11 +54,11 @@ import numpy as np
 import scipy.fft as sfft
 import xarray as xr
 
-from . import kernels
-from .errors import InputError
-from .laws import LinearCohesive, SlipWeakening
-from .record import Record
-from .response import active_channels, split_channels
+from ..solver import kernels
+from ..errors import InputError
+from ..laws import LinearCohesive, SlipWeakening
+from ..model.record import Record
+from ..solver.response import active_channels, split_channels
 
 __all__ = ["energy_record", "energy_budget", "strain_energy", "static_stiffness", "budget_summary"]
 
@@ -251,7 +251,7 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
     (h/2 (tau_k . v_k + tau_{k+1} . v_{k+1}), needs v). ``flux=False`` skips the flux estimate.
     """
     if scene is None:
-        from .simulate import scene_of
+        from ..output.simulate import scene_of
 
         scene = scene_of(ds)
     grid, mat, law, load = scene.grid, scene.material, scene.law, scene.loading
@@ -259,7 +259,7 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
     for name in [f"delta_{c}" for c in comps] + [f"tau_{c}" for c in comps]:
         if name not in ds:
             raise InputError("record.fields", f"energy_budget needs {name!r} recorded on the whole plane; "
-                                              f"use record=cracklab.energy.energy_record(scene)")
+                                              f"use record=cracklab.analysis.energy.energy_record(scene)")
     if ds.sizes["x1"] != grid.n1 or ds.sizes["x3"] != grid.n3:
         raise InputError("record.region", "energy_budget needs the whole plane (no region)")
     t = np.asarray(ds["t"].values, dtype=float)

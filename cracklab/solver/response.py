@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .history import make_engine
+from ..history import make_engine
 from .kernels import Z as Z_kernel
 from .loops import plus_product, product_predict, rotate, shear_correct, shear_predict
 from .spectral import Transforms
@@ -102,7 +102,7 @@ class Response:
             z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
             ch = _Channel(kernel, eng, 0.5 * mu / material.cs * gamma, static=-0.5 * mu * q * z0)
             if formulation == "product":
-                from .modal import product_weights
+                from ..analysis.modal import product_weights
 
                 w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
                 ch.K = ch.pre * (w0 - 0.5 * z0)

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from ..errors import InputError, check_positive
 
 
 MAX_NODES_PER_AXIS = 2**16

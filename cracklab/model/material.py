@@ -6,7 +6,7 @@ from functools import cached_property
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from ..errors import InputError, check_positive
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Material:
     @cached_property
     def cR(self) -> float:
         """Rayleigh wave speed."""
-        from .exact import rayleigh_speed_ratio
+        from ..analysis.exact import rayleigh_speed_ratio
 
         return float(rayleigh_speed_ratio(self.nu)) * self.cs
 

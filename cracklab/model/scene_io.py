@@ -30,9 +30,9 @@ import numbers
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 from .grid import Grid
-from .laws import LAWS, law_parameters
+from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
 from .record import Record

@@ -6,13 +6,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from ..errors import InputError, check_positive
 from .grid import Grid
-from .laws import LAWS, law_parameters
+from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
 from .record import Record
-from .stability import beta_max, gamma_limit
+from ..solver.stability import beta_max, gamma_limit
 
 FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
 MAX_FFT_THREADS = 1024
@@ -61,7 +61,7 @@ class Numerics:
     engine_threads: int | None = None
 
     def __post_init__(self):
-        from .history import ENGINES
+        from ..history import ENGINES
 
         if not isinstance(self.engine, str) or (self.engine not in ENGINES and self.engine != "auto"):
             raise InputError("numerics.engine",
@@ -215,25 +215,25 @@ class Scene:
     def replace(self, **changes) -> "Scene":
         return dataclasses.replace(self, **changes)
 
-    # thin wrappers over cracklab.io (lossless round trips, see docs/scenes.md)
+    # thin wrappers over cracklab.model.scene_io (lossless round trips, see docs/scenes.md)
     def to_dataset(self):
-        from .io import scene_to_dataset
+        from .scene_io import scene_to_dataset
 
         return scene_to_dataset(self)
 
     def to_toml(self) -> str:
-        from .io import scene_to_toml
+        from .scene_io import scene_to_toml
 
         return scene_to_toml(self)
 
     @staticmethod
     def from_dataset(ds) -> "Scene":
-        from .io import scene_from_dataset
+        from .scene_io import scene_from_dataset
 
         return scene_from_dataset(ds)
 
     @staticmethod
     def from_toml(text: str) -> "Scene":
-        from .io import scene_from_toml
+        from .scene_io import scene_from_toml
 
         return scene_from_toml(text)

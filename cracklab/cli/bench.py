@@ -6,16 +6,16 @@ import time
 
 import numpy as np
 
-from .grid import Grid
-from .laws import TractionFree
-from .loading import Loading
-from .material import Material
-from .record import Record
-from .response import Response
-from .scene import Numerics, Scene
-from .spectral import Transforms, backend_name
-from .stability import beta_max
-from .stepper import Stepper
+from ..model.grid import Grid
+from ..laws import TractionFree
+from ..model.loading import Loading
+from ..model.material import Material
+from ..model.record import Record
+from ..solver.response import Response
+from ..model.scene import Numerics, Scene
+from ..solver.spectral import Transforms, backend_name
+from ..solver.stability import beta_max
+from ..solver.stepper import Stepper
 
 MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
 

@@ -13,7 +13,7 @@ import mpmath as mp
 import numpy as np
 from scipy import optimize, special
 
-from . import kernels as _k
+from ..solver import kernels as _k
 
 __all__ = [
     "rayleigh_speed_ratio",
