@@ -303,7 +303,7 @@ def precision(jobs=2):
 
 def long_time_checks():
     """Mode I amplitude and period over 150 <= T <= 200 and mode III max |r - J0| (T <= 30),
-    gamma = 0.05 (the checks of tests/test_modal.py)."""
+    gamma = 0.05 (the checks of tests/analysis/test_modal.py)."""
     import scipy.special as sp
 
     s_R = exact.rayleigh_speed_ratio(NU)

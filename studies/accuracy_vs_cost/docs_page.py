@@ -111,7 +111,7 @@ def write_page(rows, path):
       " --docs\n```\n")
     w("Output: `studies/accuracy_vs_cost/results/results.csv` and `results.zarr` (one row per run, "
       "with `on_front`), `docs/figures/accuracy_pareto.png`, this page. Helpers are tested in "
-      "`tests/test_studies_quick.py`.\n")
+      "`tests/studies/test_studies_quick.py`.\n")
     w("![Pareto fronts](figures/accuracy_pareto.png)\n")
     w("Colours: engine (direct untruncated, direct truncated at T_cut = 50 or 100, exponential); "
       "markers: formulation (circle displacement = the paper's explicit scheme with the trapezoid "
@@ -126,7 +126,7 @@ def write_page(rows, path):
     w("**Lamb's problem** (`cracklab.scenes.lamb`, unit square, point load P = 1 at the centre, nu = 1/4): "
       "the opening at a station r = 0.25 from the load against Pekeris (`cracklab.analysis.exact.lamb_opening`) for "
       "tau = c_s t / r <= 1.7, before the P wave of the nearest periodic image (tau = 1.73). The exact "
-      "opening is singular at the Rayleigh arrival, so, as in `tests/test_lamb.py`, the windows "
+      "opening is singular at the Rayleigh arrival, so, as in `tests/physics/test_lamb.py`, the windows "
       "|tau - tau_P| < 0.03, |tau - tau_S| < 0.03, |tau - tau_R| < 0.08 are left out. Error: root mean "
       "square of (numerical - exact) over the other samples, divided by the static value 3P/(4 pi mu r) "
       "(the maximum is in the table). Grids n x n with n in "

@@ -10,7 +10,7 @@ Lamb (cracklab.scenes.lamb, unit square, point load P = 1 at the centre): the op
 a station r = 0.25 from the load is compared with the Pekeris solution
 (cracklab.analysis.exact.lamb_opening) for tau = c_s t / r <= 1.7, i.e. before the P wave of the
 nearest periodic image arrives (tau = 0.75/(0.25 sqrt 3) = 1.73).  The exact opening is
-singular at the Rayleigh arrival, so, as in tests/test_lamb.py, the windows
+singular at the Rayleigh arrival, so, as in tests/physics/test_lamb.py, the windows
 |tau - tau_P| < 0.03, |tau - tau_S| < 0.03 and |tau - tau_R| < 0.08 are left out.
 Error = root mean square of (numerical - exact) over the remaining samples, divided by the
 static value 3 P / (4 pi mu r) ("lamb_rms"); the maximum is reported too ("lamb_max").

@@ -354,7 +354,7 @@ load the runs took {_f(runs['asperity']['elapsed_s'] / (0.028 * runs['asperity']
 - `{_rel(out)}/numbers.json`: every number on this page.
 - Helpers: `studies/asperity_front/theory.py` (Freund's speed, A_I(v), the
   Palmer-Rice zone, the periodic correction, the semi-infinite step-load K), tested in
-  `tests/test_front_studies.py`.
+  `tests/studies/test_front_studies.py`.
 
 ## What is left
 

@@ -1,6 +1,6 @@
 """Closed-form estimates for the section 4 crack: Freund's equation of motion and a
 Palmer-Rice type cohesive-zone size. Plain numpy, no cracklab state; the study and
-tests/test_front_studies.py use these.
+tests/studies/test_front_studies.py use these.
 
 Notation: mode I, plane strain, E' = 2 mu / (1 - nu), Gc = tau_c delta_c / 2 (linear
 cohesive law), c_R Rayleigh speed, c_d dilatational speed.

@@ -340,7 +340,7 @@ def write_doc(numbers):
         "the body gives up W - dU (= 1/2 ∫ (tau0 + tau_final)·delta dA once at rest, the static energy "
         "release), and that splits into D + E_rad.")
     add("")
-    add("Checks with exact answers (`tests/test_energy.py`, about 13 s of CPU): the static energy of single "
+    add("Checks with exact answers (`tests/analysis/test_energy.py`, about 13 s of CPU): the static energy of single "
         "Fourier modes in all three channels (plane and 3D); a slowly loaded periodic row of Griffith cracks "
         "stores the exact static strain energy (to 1 %); a suddenly loaded traction-free crack radiates, at "
         "late time, exactly its static strain energy (W → 2U, E_rad → U, to 2.5 % at 256 cells) and the two "

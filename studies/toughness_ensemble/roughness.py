@@ -1,5 +1,5 @@
 """Roughness statistics of crack fronts x1_f(x3): plain numpy helpers of the toughness
-ensemble study (tested in tests/test_front_studies.py)."""
+ensemble study (tested in tests/studies/test_front_studies.py)."""
 from __future__ import annotations
 
 import numpy as np

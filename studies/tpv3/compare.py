@@ -1,7 +1,7 @@
 """Comparison of cracklab TPV3 station series with the MDSBI reference (docs/tpv3.md).
 
 Plain functions on 1-D numpy arrays, so that they can be checked on synthetic series
-with known answers (tests/test_tpv3_study.py):
+with known answers (tests/studies/test_tpv3_study.py):
 
 * ``rupture_time``: first time the slip rate exceeds a threshold (1 mm/s), either the
   first sample above it or the linearly interpolated crossing;

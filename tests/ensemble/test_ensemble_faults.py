@@ -23,7 +23,7 @@ import cracklab
 from cracklab import ensemble as E
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+ROOT = HERE.parents[1]
 
 
 def _small(n, p, t_end, every=2):

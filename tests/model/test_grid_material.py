@@ -93,7 +93,7 @@ def test_plans_follow_the_wisdom_file(tmp_path, monkeypatch):
     """A process that planned on its own (here under another cache) still takes the host's
     wisdom file as it stands when it plans a size the file holds: it measures nothing anew
     and leaves the file as it was, so a run and its resumption in another process use the
-    same plan (tests/test_resume.py compares them to the bit)."""
+    same plan (tests/output/test_resume.py compares them to the bit)."""
     pyfftw = pytest.importorskip("pyfftw")
     from cracklab.solver import spectral
     def entries(wisdom):  # FFTW's wisdom as sets of entries (their order varies)

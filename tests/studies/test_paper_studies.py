@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "studies"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "studies"))
 
 from paper import ellipse_part, lamb_part, modal_part  # noqa: E402
 

@@ -20,7 +20,7 @@ from cracklab.model.scene_io import scene_to_toml
 from interrupt import interrupted_run
 
 SIM = importlib.import_module("cracklab.output.simulate")
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 STATIONS = {"centre": (0.5, 0.5), "edge": (0.75, 0.5)}
 
 

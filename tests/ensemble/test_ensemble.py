@@ -256,7 +256,7 @@ def test_study_toml_errors(tmp_path):
 
 
 def test_demo_study_plans_on_the_asperity_builders():
-    study = E.load_study(Path(__file__).resolve().parents[1] / "studies" / "asperity_ensemble" / "study.toml")
+    study = E.load_study(Path(__file__).resolve().parents[2] / "studies" / "asperity_ensemble" / "study.toml")
     members = E.plan(study.base, study.sweep)
     assert 7 <= len(members) <= 9
     names = {E.build_scene(study.base, m.params).name for m in members}

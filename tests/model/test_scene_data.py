@@ -323,7 +323,7 @@ def test_docs_scenes_examples_run(tmp_path, monkeypatch):
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parent.parent / "docs" / "scenes.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
     code = [body for tag, body in re.findall(r"^```([\w-]*)[ \t]*\n(.*?)^```[ \t]*$", text, re.S | re.M)
             if tag == "python" and "=" in body and "(*," not in body]
     assert len(code) >= 2

@@ -345,7 +345,7 @@ def test_product_scheme_single_wave_at_the_50th_rayleigh_period(mode, gamma):
     """The default scheme for shear (product rule, predictor-corrector) on a plane grid:
     one Fourier mode of gamma = q c_s dt with the exponential engine, against the
     untruncated direct recurrence (cracklab.modal, which the direct engine reproduces to
-    1e-10, tests/test_product_scheme.py) over the 50th Rayleigh period, relative to the
+    1e-10, tests/solver/test_product_scheme.py) over the 50th Rayleigh period, relative to the
     long-time amplitude."""
     from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree, modal_response, simulate
 

@@ -33,7 +33,7 @@ from cracklab.model.scene_io import scene_to_toml
 from interrupt import interrupted_run
 
 SIM = importlib.import_module("cracklab.output.simulate")
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 HERE = Path(__file__).resolve().parent
 
 
