@@ -487,8 +487,9 @@ def difference(a, b):
 
 
 def compare_recordings(base, new, base_path=None, new_path=None, names=None, verbose=False,
-                       ignore_scene=False, out=sys.stdout):
+                       ignore_scene=False, out=None):
     """Print the comparison of ``new`` against ``base``; True if every array is identical."""
+    out = sys.stdout if out is None else out
     bv = _Values(base_path) if base_path else None
     nv = _Values(new_path) if new_path else None
     names = list(names) if names else list(base["cases"])
