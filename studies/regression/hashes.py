@@ -39,9 +39,11 @@ and the same user cache (``$CRACKLAB_CACHE``, else ``$XDG_CACHE_HOME/cracklab``,
 FFTW_MEASURE, which picks among algorithms by timing them, from the host's wisdom file in
 that directory: every process then uses the plan stored there, but a recording made with
 the wisdom gone (an emptied cache, another host) can plan differently, and another plan
-changes the last bits (measured: with a fresh cache kostrov_plane and tpv3_600m differ by
-up to 1e-14 relative in the fields, 4e-10 relative in the small tau_3 of a TPV3 station,
-while the other cases stay identical; a fresh cache of kernel fits alone changed nothing).
+changes the last bits (measured: with an empty cache the plane cases kostrov_plane and
+periodic_cracks_II and the 80 x 40 tpv3_600m differ by rounding, up to ~1e-14 absolute
+in the dimensionless fields and ~1e-9 relative where a value is near zero, e.g. tau_3 at
+a TPV3 station, while the other cases stay identical; removing only the kernel fits,
+the wisdom kept, changed no array).
 The exponential engine's kernel fits are stored there too and read back by every later
 process, fresh ones included. A run reads an existing plan and fit, never its own, so
 with the cache kept results are reproducible run to run and process to process. The
