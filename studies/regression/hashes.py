@@ -61,6 +61,9 @@ builders, ``Scene``, ``Record``, ``Numerics``, the laws, ``simulate``, ``station
   traction every 8 steps, two stations; default numerics (exponential engine).
 - lamb64_overlap: the same with two engine threads (the engine's advance on a worker
   thread overlapping the FFTs, ``Numerics(engine_threads=2)``).
+- lamb60: Lamb's problem on 60 x 60, t_end 1: a grid whose 1/N is not a power of two
+  (on the power-of-two grids a scale by 1/N is exact wherever it is applied, so a moved
+  scaling shows only here and in tpv3_600m).
 - lamb32_direct: Lamb's problem, 32 x 32, t_end 0.5, the direct (reference) engine.
 - elliptical: suddenly loaded elliptical crack, 64 x 64, a = 0.25, b = 0.15, t_end 0.5.
 - kostrov_plane: plane (n3 = 1) Kostrov crack, n = 512, speed 0.7, t_end 0.3.
@@ -153,6 +156,13 @@ def case_lamb64_overlap():
     cl = _cl()
     rec = cl.Record(fields=("delta_2", "v_2"), every=8, stations={"r16": (0.75, 0.5)})
     return cl.scenes.lamb(n=64, t_end=1.0, record=rec, numerics=cl.Numerics(fft_threads=1, engine_threads=2))
+
+
+def case_lamb60():
+    """Lamb 60 x 60 (1/N of the transforms not a power of two), t_end 1."""
+    cl = _cl()
+    rec = cl.Record(fields=("delta_2", "v_2", "tau_2"), every=8, stations={"r15": (0.75, 0.5)})
+    return cl.scenes.lamb(n=60, t_end=1.0, record=rec)
 
 
 def case_lamb32_direct():
@@ -286,6 +296,7 @@ def _run_scene(builder):
 CASES = {
     "lamb64": _run_scene(case_lamb64),
     "lamb64_overlap": _run_scene(case_lamb64_overlap),
+    "lamb60": _run_scene(case_lamb60),
     "lamb32_direct": _run_scene(case_lamb32_direct),
     "elliptical": _run_scene(case_elliptical),
     "kostrov_plane": _run_scene(case_kostrov_plane),
