@@ -157,6 +157,7 @@ def test_summary_of_alternated_benches():
     assert s["ratio_min"] == pytest.approx(0.9) and s["ratio_max"] == pytest.approx(1.0)
     assert s["ratio_per_fft_pair"] == pytest.approx(10.0 / 11.0)  # rounds 0.9, 1.5, 10/11
     assert s["ratio_per_fft_pair_max"] == pytest.approx(1.5)
+    assert s["ratio_best"] == pytest.approx(0.9)
     assert s["peak_rss_mb_a"] == 510 and s["peak_rss_mb_b"] == 520
     assert "| 512x512 I | 7 | 11.00 | 10.00 | 0.909 (0.900-1.000) |" in perf.table({"512x512 I": s},
                                                                                   {"512x512 I": 7})
