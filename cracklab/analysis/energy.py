@@ -56,7 +56,6 @@ import xarray as xr
 
 from ..solver import kernels
 from ..errors import InputError
-from ..laws import LinearCohesive, SlipWeakening
 from ..model.record import Record
 from ..solver.response import active_channels, split_channels
 
@@ -210,28 +209,14 @@ def _cadence(t, dt):
 
 
 def _interface_state(law, comps):
-    """Running state reconstructed from the recorded delta: the max opening for a
-    cohesive law, the slip path for slip weakening (what the loads and the split need)."""
-    if isinstance(law, LinearCohesive):
-        return "delta_max"
-    if isinstance(law, SlipWeakening):
-        return "slip"
-    return None
+    """The running state the energy budget rebuilds from the recorded slip (the law's
+    ``energy_state``: the max opening for a cohesive law, the slip path for slip weakening)."""
+    return law.energy_state
 
 
 def _fracture_density(law, kind, state, initial):
-    """Fracture energy per unit area reached so far (array over the plane)."""
-    if kind == "delta_max":
-        dc = np.asarray(law.delta_c, dtype=float)
-        m = np.minimum(state, dc)
-        g = np.asarray(law.tau_c, dtype=float) * (m - m * m / (2.0 * dc))
-        return np.where(initial, 0.0, g)
-    if kind == "slip":
-        Dc = np.asarray(law.D_c, dtype=float)
-        m = np.minimum(state, Dc)
-        drop = (np.asarray(law.mu_s) - np.asarray(law.mu_d)) * np.asarray(law.sigma_n)
-        return drop * (m - m * m / (2.0 * Dc))
-    return None
+    """Fracture energy per unit area reached so far (array over the plane), or None."""
+    return None if kind is None else law.fracture_energy(state, initial)
 
 
 def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chunk: int = 64) -> xr.Dataset:

@@ -10,6 +10,14 @@ from ..errors import InputError
 FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
 
 
+def state_fields() -> tuple:
+    """The state variables of the laws, which a Record may name too (the Scene checks that
+    its law has the one named)."""
+    from ..laws import LAWS
+
+    return tuple(sorted({name for law in LAWS.values() for name in law.state_variables}))
+
+
 @dataclass(frozen=True)
 class Record:
     """Grid ``fields`` every ``every`` steps or at ``times`` (optionally on ``region``,
@@ -30,8 +38,9 @@ class Record:
                                               f"got {self.fields!r}")
         object.__setattr__(self, "fields", tuple(self.fields))
         for f in self.fields:
-            if not isinstance(f, str) or f not in FIELDS:
-                raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}")
+            if not isinstance(f, str) or f not in FIELDS + state_fields():
+                raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}, "
+                                                  f"or a state variable of the law ({', '.join(state_fields())})")
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")

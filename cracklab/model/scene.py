@@ -11,7 +11,7 @@ from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
-from .record import Record
+from .record import FIELDS, Record
 from ..solver.stability import beta_max, gamma_limit
 
 FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
@@ -158,8 +158,14 @@ class Scene:
         self.record.snapshot_steps(self.nsteps, self.dt)
         self.record.region_slices(self.grid)
         self.record.station_nodes(self.grid)
+        state = type(self.law).state_variables
         for f in self.record.fields:
-            if f != "strength" and int(f[-1]) not in active:
+            if f in state or f == "strength":
+                continue
+            if f not in FIELDS:
+                raise InputError("record.fields", f"{f!r} is not a state variable of the law {self.law.kind!r} "
+                                                  f"(its state variables: {', '.join(state) or 'none'})")
+            if int(f[-1]) not in active:
                 raise InputError("record.fields", f"{f!r} is not computed: active components are {active}")
 
     def _check_shapes(self):
@@ -174,11 +180,13 @@ class Scene:
             if not boolean and arr.dtype != bool and not np.all(np.isfinite(arr) | (arr == np.inf)):
                 raise InputError(name, "field values must be finite")
 
+        kinds = type(self.law).parameters()
         for key, value in law_parameters(self.law).items():
-            if key in ("contact", "speed", "origin"):
+            kind = kinds[key][1]
+            if kind not in ("field", "mask"):
                 continue
-            check(f"law.{key}", value, boolean=key in ("bonded", "initial_crack"))
-            if key in ("bonded", "initial_crack") and value is not None and np.asarray(value).dtype != bool:
+            check(f"law.{key}", value, boolean=kind == "mask")
+            if kind == "mask" and value is not None and np.asarray(value).dtype != bool:
                 raise InputError(f"law.{key}", f"must be a boolean mask, got dtype {np.asarray(value).dtype}")
         for c in (1, 2, 3):
             check(f"loading.tau0_{c}", self.loading.field(c), boolean=True)

@@ -33,6 +33,7 @@ import numpy as np
 from ..errors import InputError
 from .grid import Grid
 from ..laws import LAWS, law_parameters
+from .units import input_unit
 from .loading import Loading
 from .material import Material
 from .record import Record
@@ -41,7 +42,6 @@ SECTIONS = ("material", "grid", "law", "loading", "record", "numerics")
 TOP = ("t_end", "beta", "units", "name")
 UNIT_KEYS = ("length", "time", "stress")
 DEFAULT_UNITS = {"length": "1", "time": "1", "stress": "1"}
-MASKS = ("bonded", "initial_crack")      # boolean (n1, n3) law parameters
 
 # kinds of values, decided from the dataclass annotations (overridable per field)
 _BASE_KINDS = {"float": "number", "int": "integer", "bool": "boolean", "str": "string",
@@ -77,7 +77,7 @@ def _kind(section: str, f: dataclasses.Field) -> tuple[str, bool]:
     optional = "None" in ann.split("|")
     if (section, f.name) in _OVERRIDES:
         return _OVERRIDES[(section, f.name)], optional
-    if section == "law" and f.name in MASKS:
+    if section == "law" and f.metadata.get("kind") == "mask":
         return "mask", True
     if "ndarray" in ann:
         return "field", optional
@@ -175,12 +175,7 @@ def scene_from_toml(text: str):
 
 
 def _field_attrs(scene, section, key):
-    kinds = {"tau0_1": "stress", "tau0_2": "stress", "tau0_3": "stress", "tau_c": "stress",
-             "sigma_n": "stress", "residual": "stress", "strength_before": "stress",
-             "delta_c": "length", "D_c": "length"}
-    kind = kinds.get(key)
-    return {"long_name": f"scene parameter {section}.{key}",
-            "units": scene.units.get(kind, "1") if kind else "1"}
+    return {"long_name": f"scene parameter {section}.{key}", "units": input_unit(scene, section, key)}
 
 
 def scene_attrs(scene) -> dict:

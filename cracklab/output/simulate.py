@@ -11,6 +11,7 @@ from .. import __version__
 from . import checkpoint
 from ..errors import InputError, SimulationError, StoreError, StoreWarning
 from ..model.scene_io import scene_from_data, scene_to_json
+from ..model.units import input_unit, unit
 from ..solver.stepper import Stepper
 
 LONG_NAMES = {
@@ -22,33 +23,25 @@ LONG_NAMES = {
 }
 
 
-def _units(scene, kind):
-    u = scene.units
-    if kind == "velocity":
-        return "1" if u["length"] == "1" and u["time"] == "1" else f"{u['length']} {u['time']}-1"
-    return u[kind]
-
-
 def _attrs(scene, name):
-    long_name, kind = LONG_NAMES[name]
-    return {"long_name": long_name, "units": _units(scene, kind)}
-
-
-INPUT_KINDS = {"tau0_1": "stress", "tau0_2": "stress", "tau0_3": "stress", "tau_c": "stress",
-               "sigma_n": "stress", "residual": "stress", "strength_before": "stress",
-               "delta_c": "length", "D_c": "length"}
+    if name in LONG_NAMES:
+        long_name, kind = LONG_NAMES[name]
+    else:  # a state variable of the law
+        long_name, kind = type(scene.law).state_variables[name]
+    return {"long_name": long_name, "units": unit(scene.units, kind)}
 
 
 def _input_attrs(scene, name):
     """Attrs of a scene input field stored as ``input_<section>_<key>``."""
     section, key = name[len("input_"):].split("_", 1)
-    kind = INPUT_KINDS.get(key)
-    return {"long_name": f"scene input {section}.{key}", "units": scene.units[kind] if kind else "1"}
+    return {"long_name": f"scene input {section}.{key}", "units": input_unit(scene, section, key)}
 
 
 def _field(state, name):
     if name == "strength":
         return state.strength
+    if name in state.law_state:
+        return state.law_state[name]
     kind, c = name.split("_")
     return {"delta": state.delta, "v": state.v, "tau": state.tau}[kind][int(c)]
 

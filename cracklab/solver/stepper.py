@@ -8,7 +8,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
-from ..laws import solve_velocity
 from .loops import add_mean_step, add_scaled, plus_mean, plus_scaled
 from .response import Response
 from .spectral import Transforms
@@ -136,9 +135,9 @@ class Stepper:
                     trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps}
                     pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
                     law.update(pstate, trial, dt, v, t, tau)
-                    # tau* = tau0 + f (solve_velocity adds the load; f: the response's work arrays)
+                    # tau* = tau0 + f (the law's solve adds the load; f: the response's work arrays)
                     terms = load.terms(t, comps, _crack_length(law, pstate, load, area, width, l0))
-                    vp, _ = solve_velocity(law, pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms,
+                    vp, _ = law.solve(pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms,
                                            traction=False)
                     f = response.correct(vp)
                     # then with the predicted v_n
@@ -147,7 +146,7 @@ class Stepper:
                     # the law reads v_{n-1}, t and tau_{n-1}, not the slip: its update is the
                     # same for the predictor and the step, done once, and so is its strength
                     law_step = self._update_law(n, t, delta, v, tau)
-                    vp, _ = solve_velocity(law, lstate, f, delta, eta, dt, *law_step[1:], traction=False)
+                    vp, _ = law.solve(lstate, f, delta, eta, dt, *law_step[1:], traction=False)
                     f = response.correct(vp)
             elif velocity:
                 dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
@@ -161,7 +160,7 @@ class Stepper:
                 trial = delta
             length, strength, terms = law_step or self._update_law(n, t, trial, v, tau)
             # tau* = tau0 + f (f: the response's work arrays)
-            v_new, tau = solve_velocity(law, lstate, f, trial, eta, dt, strength, terms)
+            v_new, tau = law.solve(lstate, f, trial, eta, dt, strength, terms)
             if (velocity or product) and n > 0:
                 # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
                 for c in comps:

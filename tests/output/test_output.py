@@ -274,9 +274,9 @@ BAD_STEP, BAD_NODE = 13, (5, 3)
 @pytest.fixture
 def inject_nan(monkeypatch):
     """Make step (v) return NaN at one node of one step, as a blow-up would."""
-    import cracklab.solver.stepper as stepper
+    from cracklab.laws import Law
 
-    real = stepper.solve_velocity
+    real = Law.solve
     calls = {"n": 0}
 
     def faulty(*args, **kwargs):
@@ -287,7 +287,7 @@ def inject_nan(monkeypatch):
         calls["n"] += 1
         return v, tau
 
-    monkeypatch.setattr(stepper, "solve_velocity", faulty)
+    monkeypatch.setattr(Law, "solve", faulty)
 
 
 @pytest.mark.parametrize("use_store", [False, True], ids=["memory", "store"])

@@ -1,0 +1,116 @@
+"""The interface-law protocol (docs/developer.md, "Add a law").
+
+A law is a frozen dataclass of its parameters that derives from :class:`Law`:
+
+* class attributes: ``kind`` (its TOML name, by which it registers), ``components``
+  (the components it acts on: NORMAL, SHEAR or ALL), ``reads_slip`` (whether ``update``
+  reads the slip), ``state_variables`` ({name: (long_name, unit)}: what of its state the
+  recorder can record by name);
+* parameters: dataclass fields made with :func:`parameter`, which says the unit each
+  carries ("stress", "length", "velocity", "time", "1") and its kind ("field": a number
+  or an (n1, n3) field; "mask": a boolean (n1, n3) field; "scalar": a number; "option":
+  anything else); every law has the mask ``bonded`` (points that never move);
+* methods: ``init_state(grid)``, ``update(state, delta, dt, v_prev, t, tau_prev)`` (step
+  (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
+  ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
+  strength depends on v) and ``fracture_energy`` (the energy budget) have defaults.
+"""
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import InputError
+from .solve import solve_velocity
+
+NORMAL = (2,)
+SHEAR = (1, 3)
+ALL = (1, 2, 3)
+UNITS = ("stress", "length", "velocity", "time", "1")
+KINDS = ("field", "mask", "scalar", "option")
+
+
+def parameter(*, unit: str = "1", kind: str = "field", default=dataclasses.MISSING):
+    """A law parameter: a dataclass field that carries its unit and kind (see module doc)."""
+    if unit not in UNITS or kind not in KINDS:
+        raise ValueError(f"unit must be one of {UNITS} and kind one of {KINDS}, got {unit!r}, {kind!r}")
+    return dataclasses.field(default=default, metadata={"unit": unit, "kind": kind})
+
+
+def bonded_mask():
+    """The ``bonded`` parameter every law has: a boolean (n1, n3) mask, or None."""
+    return parameter(kind="mask", default=None)
+
+
+def check_parameter(law, name, lower=0.0, allow_equal=False, allow_inf=False):
+    """Validate a scalar or field parameter of ``law`` (> lower, or >= with allow_equal;
+    finite unless allow_inf)."""
+    value = getattr(law, name)
+    field_name = f"law.{name}"
+    op = ">=" if allow_equal else ">"
+    finite = "" if allow_inf else "finite "
+    if isinstance(value, (bool, np.bool_, str, bytes)) or value is None:
+        raise InputError(field_name, f"must be a {finite}number {op} {lower:g} or an (n1, n3) field of them, "
+                                     f"got {value!r}")
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(field_name, f"must be a {finite}number {op} {lower:g} or an (n1, n3) field of them, "
+                                     f"got {value!r}") from None
+    bad = (arr < lower) if allow_equal else (arr <= lower)
+    infinite = np.isinf(arr) & ~bad if not allow_inf else np.zeros(arr.shape, bool)
+    bad = bad | infinite | np.isnan(arr)
+    if np.any(bad):
+        if arr.ndim == 0:
+            got = value
+        else:
+            got = f"a field holding {arr[bad].ravel()[0]:g}"
+        if np.any(infinite) or np.any(np.isnan(arr)):
+            raise InputError(field_name, f"must be a {finite}number {op} {lower:g}, got {got}")
+        raise InputError(field_name, f"must be {op} {lower:g}, got {got}")
+    if arr.ndim == 0:
+        object.__setattr__(law, name, float(arr))
+
+
+
+
+class Law:
+    """Defaults of the interface-law protocol (see the module docstring)."""
+
+    kind = ""
+    components = ALL
+    reads_slip = True
+    contact = False
+    state_variables: dict = {}
+
+    @classmethod
+    def parameters(cls) -> dict:
+        """{name: (unit, kind)} of the law's parameters."""
+        return {f.name: (f.metadata.get("unit", "1"), f.metadata.get("kind", "option"))
+                for f in dataclasses.fields(cls)}
+
+    def broken(self, state):
+        """Where the plane has no cohesion left (True: everywhere)."""
+        return True
+
+    def failed(self, state):
+        """Where the plane has failed, for the crack length of constant-K loading (None: not defined)."""
+        return None
+
+    def solve(self, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
+        """Step (v): the velocity (and traction) from the elastic estimate ``tau_star``."""
+        return solve_velocity(self, state, tau_star, delta, eta, dt, strength, load, traction)
+
+    def fracture_energy(self, state_history):
+        """Fracture energy per unit area reached, from ``{name: array}`` of the state the
+        energy budget reconstructs (``energy_state``); None when the law dissipates none."""
+        return None
+
+    #: the state variable the energy budget rebuilds from the recorded slip (None: none)
+    energy_state = None
+
+
+def law_parameters(law) -> dict:
+    """Parameters of a law as a dict (fields of the dataclass)."""
+    return {f.name: getattr(law, f.name) for f in dataclasses.fields(law)}

@@ -1,0 +1,60 @@
+"""The mode I linear cohesive law (Eq. 38, Fig. 4)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .base import NORMAL, Law, bonded_mask, check_parameter, parameter
+
+
+@dataclass(frozen=True)
+class LinearCohesive(Law):
+    """Mode I linear cohesive law (Fig. 4): strength tau_c (1 - max opening/delta_c)^+.
+
+    No rehealing; inside the cohesive zone the opening rate cannot be negative;
+    broken faces may close but never interpenetrate. ``initial_crack`` marks points
+    broken at t = 0.
+    """
+
+    tau_c: float | np.ndarray = parameter(unit="stress")
+    delta_c: float | np.ndarray = parameter(unit="length")
+    initial_crack: np.ndarray | None = parameter(kind="mask", default=None)
+    bonded: np.ndarray | None = bonded_mask()
+    reads_slip = True  # its update reads delta
+    kind = "linear_cohesive"
+    components = NORMAL
+    contact = True
+    state_variables = {"delta_max": ("largest opening reached", "length")}
+    energy_state = "delta_max"
+
+    def __post_init__(self):
+        check_parameter(self, "tau_c")
+        check_parameter(self, "delta_c")
+
+    def init_state(self, grid):
+        dmax = np.zeros(grid.shape)
+        if self.initial_crack is not None:
+            dmax = np.where(self.initial_crack, np.inf, 0.0)
+        return {"delta_max": dmax}
+
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
+        np.maximum(state["delta_max"], delta[2], out=state["delta_max"])
+
+    def strength(self, state, t, grid):
+        return self.tau_c * np.clip(1.0 - state["delta_max"] / self.delta_c, 0.0, 1.0)
+
+    def broken(self, state):
+        return state["delta_max"] >= self.delta_c
+
+    def failed(self, state):
+        return self.broken(state)
+
+    def fracture_energy(self, delta_max, initial):
+        """G reached so far: the work of the cohesive traction, tau_c (m - m^2 / (2 delta_c)) with
+        m = min(delta_max, delta_c); none on the initial crack."""
+        dc = np.asarray(self.delta_c, dtype=float)
+        m = np.minimum(delta_max, dc)
+        g = np.asarray(self.tau_c, dtype=float) * (m - m * m / (2.0 * dc))
+        return np.where(initial, 0.0, g)

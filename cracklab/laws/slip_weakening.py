@@ -1,0 +1,65 @@
+"""Linear slip-weakening friction."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
+
+
+@dataclass(frozen=True)
+class SlipWeakening(Law):
+    """Linear slip-weakening friction: mu_s sigma_n -> mu_d sigma_n over D_c of slip.
+
+    ``sigma_n`` is the (compressive positive) normal stress; the slip is the
+    accumulated slip path. In 3D the slip rate is collinear with the shear traction.
+    """
+
+    mu_s: float | np.ndarray = parameter()
+    mu_d: float | np.ndarray = parameter()
+    D_c: float | np.ndarray = parameter(unit="length")
+    sigma_n: float | np.ndarray = parameter(unit="stress")
+    bonded: np.ndarray | None = bonded_mask()
+    reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
+    kind = "slip_weakening"
+    components = SHEAR
+    state_variables = {"slip": ("slip path", "length")}
+    energy_state = "slip"
+
+    def __post_init__(self):
+        check_parameter(self, "mu_s", allow_equal=True)
+        check_parameter(self, "mu_d", allow_equal=True)
+        check_parameter(self, "D_c")
+        check_parameter(self, "sigma_n", allow_equal=True)
+        try:
+            above = np.asarray(self.mu_d) > np.asarray(self.mu_s)
+        except ValueError:          # fields of different shapes: the scene names the wrong one
+            above = False
+        if np.any(above):
+            raise InputError("law.mu_d", f"must be <= law.mu_s (static friction {self.mu_s!r}), got {self.mu_d!r}"
+                             if np.ndim(self.mu_d) == 0 and np.ndim(self.mu_s) == 0 else
+                             "must be <= law.mu_s at every point of the field")
+
+    def init_state(self, grid):
+        return {"slip": np.zeros(grid.shape)}
+
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
+        if v_prev is not None:
+            speed = np.sqrt(sum(v_prev[c] ** 2 for c in v_prev if c in SHEAR))
+            state["slip"] += dt * speed
+
+    def strength(self, state, t, grid):
+        weakening = np.clip(state["slip"] / self.D_c, 0.0, 1.0)
+        return (self.mu_s - (self.mu_s - self.mu_d) * weakening) * self.sigma_n
+
+    def failed(self, state):
+        return state["slip"] >= self.D_c
+
+    def fracture_energy(self, slip, initial):
+        """G reached so far: (mu_s - mu_d) sigma_n (m - m^2 / (2 D_c)) with m = min(slip, D_c)."""
+        Dc = np.asarray(self.D_c, dtype=float)
+        m = np.minimum(slip, Dc)
+        drop = (np.asarray(self.mu_s) - np.asarray(self.mu_d)) * np.asarray(self.sigma_n)
+        return drop * (m - m * m / (2.0 * Dc))
