@@ -234,6 +234,24 @@ def test_stability_nu_table_matches_cracklab_stability():
         assert [r[k] for r in rows] == pytest.approx(list(LIMITS[scheme][mode]), abs=6e-4), (scheme, mode)
 
 
+def test_every_law_has_its_row_in_the_toml_reference():
+    """docs/scenes.md lists every registered law with exactly its parameters and state."""
+    from cracklab.laws import LAWS
+
+    text = (DOCS / "scenes.md").read_text()
+    (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| kind | class | acts on")]
+    rows = {}
+    for line in tab[2:]:
+        kind, cls, _, params, state = [c.strip() for c in line.strip("|").split("|")]
+        rows[kind.strip("`")] = (cls.strip("`"), params, state)
+    assert set(rows) == set(LAWS)
+    for kind, law in LAWS.items():
+        cls, params, state = rows[kind]
+        assert cls == law.__name__
+        assert params == ", ".join(f"`{n}` ({u}, {k})" for n, (u, k) in law.parameters().items())
+        assert state == (", ".join(f"`{n}` ({u})" for n, (_, u) in law.state_variables.items()) or "-")
+
+
 def test_modal_scheme_tables_match_the_study():
     """The two tables of the 12-scheme study in verification.md are what
     studies/modal_schemes.py prints (the figure is not redrawn here)."""

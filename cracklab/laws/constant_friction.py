@@ -1,0 +1,34 @@
+"""Constant (Coulomb) friction: the strength mu_f sigma_n does not change."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
+
+
+@dataclass(frozen=True)
+class ConstantFriction(Law):
+    """Shear strength ``mu_f sigma_n`` (``sigma_n`` compressive positive): the plane slides
+    where the shear traction would exceed it, with the slip rate collinear with the traction."""
+
+    mu_f: float | np.ndarray = parameter()
+    sigma_n: float | np.ndarray = parameter(unit="stress")
+    bonded: np.ndarray | None = bonded_mask()
+    kind = "constant_friction"
+    components = SHEAR
+    reads_slip = False
+
+    def __post_init__(self):
+        check_parameter(self, "mu_f", allow_equal=True)
+        check_parameter(self, "sigma_n", allow_equal=True)
+
+    def init_state(self, grid):
+        return {}
+
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
+        pass
+
+    def strength(self, state, t, grid):
+        return self.mu_f * self.sigma_n
