@@ -163,15 +163,70 @@ def scene_to_toml(scene) -> str:
     return tomli_w.dumps(data)
 
 
-def scene_from_toml(text: str):
-    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``."""
+MAX_NESTING = 32        # levels of arrays and tables in an input file (a scene needs 4)
+
+
+def check_nesting(data, where: str = "", limit: int = MAX_NESTING):
+    """Raise one InputError naming the field when lists and tables in ``data`` nest
+    deeper than ``limit`` levels (iterative: any depth is checked without recursion)."""
+    stack = [(data, where, 0)]
+    while stack:
+        value, path, depth = stack.pop()
+        if isinstance(value, dict):
+            items = ((f"{path}.{k}" if path else str(k), v) for k, v in value.items())
+        elif isinstance(value, (list, tuple)):
+            items = ((path, v) for v in value)
+        else:
+            continue
+        if depth >= limit:
+            raise InputError(path or "toml", f"must not nest arrays or tables deeper than {limit} levels")
+        stack.extend((v, p, depth + 1) for p, v in items if isinstance(v, (dict, list, tuple)))
+
+
+def read_toml_file(path, where: str | None = None) -> dict:
+    """``read_toml`` of the file at ``path``; a file that cannot be read (none there, a
+    directory, no permission) is one InputError naming ``where`` (default: the path)."""
+    where = str(path) if where is None else where
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except FileNotFoundError:
+        raise InputError(where, "no such file") from None
+    except OSError as exc:
+        raise InputError(where, f"cannot be read: {exc.strerror or exc}") from None
+    return read_toml(raw, where)
+
+
+def read_toml(source, where: str = "toml") -> dict:
+    """The tables of a TOML document (``source``: text, or the bytes of a file), checked
+    for nesting (``check_nesting``). Bytes that are not UTF-8 text (a binary file), malformed
+    TOML, and arrays nested too deeply for the parser each end in one InputError naming
+    ``where`` (or the field)."""
     import tomllib
 
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        try:
+            source = bytes(source).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(where, f"not valid TOML: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at "
+                                    f"offset {exc.start}); the file must be TOML text, not binary") from None
+    if not isinstance(source, str):
+        raise InputError(where, f"must be TOML text, got {type(source).__name__}")
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(source)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError("toml", f"not valid TOML: {exc}") from None
-    return scene_from_data(data)
+        raise InputError(where, f"not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(where, f"not valid TOML: arrays or tables nested too deeply (more than "
+                                f"{MAX_NESTING} levels are refused)") from None
+    check_nesting(data)
+    return data
+
+
+def scene_from_toml(text):
+    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``
+    (``text``: the TOML text, or the bytes of a file)."""
+    return scene_from_data(read_toml(text, "toml"))
 
 
 def _field_attrs(scene, section, key):
@@ -352,6 +407,7 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     arrays = arrays or {}
     if not isinstance(data, dict):
         raise InputError("scene", f"must be a table, got {type(data).__name__}")
+    check_nesting(data)
     allowed = set(SECTIONS) | set(TOP)
     for key in data:
         if key not in allowed:
