@@ -80,7 +80,8 @@ class Record:
         if self.times is not None:
             for t in self.times:
                 if not 0 <= t <= nsteps * dt * (1 + 1e-12):
-                    raise InputError("record.times", f"must lie in [0, t_end = {nsteps * dt:g}], got {t:g}")
+                    raise InputError("record.times", f"must lie in [0, t_end = {nsteps * dt:.6g}] (the end of the "
+                                                     f"last of {nsteps} steps of dt = {dt:.6g}), got {t:.6g}")
             return np.unique(np.rint(np.asarray(self.times) / dt).astype(int))
         every = self.every or max(1, nsteps // 20)
         steps = np.arange(0, nsteps + 1, every)
