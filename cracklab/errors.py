@@ -49,6 +49,34 @@ def _shown(value, limit=80) -> str:
     return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
+MAX_NESTING = 32        # levels of lists and tables in an input (a scene needs 4)
+
+
+def check_nesting(data, where: str = "", limit: int = MAX_NESTING):
+    """Raise one InputError naming the field when lists, tuples and dicts in ``data`` nest
+    deeper than ``limit`` levels (iterative: any depth is checked without recursion, so
+    that no message or check later recurses through the value)."""
+    stack = [(data, where, 0)]
+    while stack:
+        value, path, depth = stack.pop()
+        if isinstance(value, dict):
+            items = ((f"{path}.{k}" if path else str(k), v) for k, v in value.items())
+        elif isinstance(value, (list, tuple)):
+            items = ((path, v) for v in value)
+        else:
+            continue
+        if depth >= limit:
+            raise InputError(path or "toml", f"must not nest arrays or tables deeper than {limit} levels")
+        stack.extend((v, p, depth + 1) for p, v in items if isinstance(v, (dict, list, tuple)))
+
+
+def check_fields_nesting(obj, section: str = ""):
+    """``check_nesting`` over the fields of the dataclass ``obj`` (named <section>.<field>)."""
+    import dataclasses
+
+    check_nesting({f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}, section)
+
+
 class StoreError(RuntimeError):
     """A run's Zarr store cannot be used: not a cracklab store, another format, not
     writable, disk full, nothing to resume. ``path`` names the store."""

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from .errors import InputError, check_fields_nesting, check_positive
 
 
 MAX_NODES_PER_AXIS = 2**16
@@ -51,6 +51,7 @@ class Grid:
     L3: float
 
     def __post_init__(self):
+        check_fields_nesting(self, "grid")
         n1 = _check_size("grid.n1", self.n1)
         n3 = _check_size("grid.n3", self.n3)
         for name, n in (("grid.n1", n1), ("grid.n3", n3)):

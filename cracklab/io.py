@@ -30,7 +30,7 @@ import numbers
 
 import numpy as np
 
-from .errors import InputError
+from .errors import MAX_NESTING, InputError, check_nesting
 from .grid import Grid
 from .laws import LAWS, law_parameters
 from .loading import Loading
@@ -161,26 +161,6 @@ def scene_to_toml(scene) -> str:
             continue
         data[section][key] = np.asarray(value).tolist() if _is_array(value) else _plain(value)
     return tomli_w.dumps(data)
-
-
-MAX_NESTING = 32        # levels of arrays and tables in an input file (a scene needs 4)
-
-
-def check_nesting(data, where: str = "", limit: int = MAX_NESTING):
-    """Raise one InputError naming the field when lists and tables in ``data`` nest
-    deeper than ``limit`` levels (iterative: any depth is checked without recursion)."""
-    stack = [(data, where, 0)]
-    while stack:
-        value, path, depth = stack.pop()
-        if isinstance(value, dict):
-            items = ((f"{path}.{k}" if path else str(k), v) for k, v in value.items())
-        elif isinstance(value, (list, tuple)):
-            items = ((path, v) for v in value)
-        else:
-            continue
-        if depth >= limit:
-            raise InputError(path or "toml", f"must not nest arrays or tables deeper than {limit} levels")
-        stack.extend((v, p, depth + 1) for p, v in items if isinstance(v, (dict, list, tuple)))
 
 
 def read_toml_file(path, where: str | None = None) -> dict:

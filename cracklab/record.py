@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_fields_nesting
 
 FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
 
@@ -23,6 +23,7 @@ class Record:
     stations: dict | None = None
 
     def __post_init__(self):
+        check_fields_nesting(self, "record")
         if isinstance(self.fields, str):
             object.__setattr__(self, "fields", (self.fields,))
         if not isinstance(self.fields, (list, tuple, np.ndarray)):

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import InputError, check_positive
+from .errors import InputError, check_fields_nesting, check_positive
 from .grid import Grid
 from .laws import LAWS, law_parameters
 from .loading import Loading
@@ -60,6 +60,7 @@ class Numerics:
     engine_threads: int | None = None
 
     def __post_init__(self):
+        check_fields_nesting(self, "numerics")
         from .history import ENGINES
 
         if not isinstance(self.engine, str) or (self.engine not in ENGINES and self.engine != "auto"):
@@ -104,6 +105,7 @@ class Scene:
     name: str = "scene"
 
     def __post_init__(self):
+        check_fields_nesting(self, "")
         for name, cls in (("material", Material), ("grid", Grid), ("loading", Loading),
                           ("record", Record), ("numerics", Numerics)):
             if not isinstance(getattr(self, name), cls):

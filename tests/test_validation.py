@@ -247,6 +247,18 @@ def test_deeply_nested_arrays_are_one_input_error(tmp_path, depth):
     data["t_end"] = v
     with pytest.raises(InputError, match="^t_end: must not nest arrays or tables deeper than 32 levels"):
         scene_from_data(data, arrays)
+    # and the Python constructors (a message showing the value recursed through it)
+    loop = []
+    loop.append(loop)
+    for value in (v, loop):
+        for field, make in (("law.tau_c", lambda x: LinearCohesive(tau_c=x, delta_c=1.0)),
+                            ("loading.tau0_2", lambda x: Loading(tau0_2=x)),
+                            ("record.stations.a", lambda x: Record(stations={"a": x})),
+                            ("material.nu", lambda x: Material(mu=1.0, cs=1.0, nu=x)),
+                            ("units.length", lambda x: small_scene(units={"length": x, "time": "1", "stress": "1"}))):
+            with pytest.raises(InputError) as err:
+                make(value)
+            assert str(err.value) == f"{field}: must not nest arrays or tables deeper than 32 levels"
 
 
 def test_a_huge_window_is_refused_before_the_store_and_a_long_one_runs(tmp_path):
