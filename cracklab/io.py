@@ -163,6 +163,22 @@ def scene_to_toml(scene) -> str:
     return tomli_w.dumps(data)
 
 
+def read_scene_json(text, where: str = "scene") -> dict:
+    """The scene of a run's ``scene`` attr (JSON text): a damaged attr (not JSON, nested
+    too deeply for the decoder, not a table) is one InputError naming ``where``."""
+    if not isinstance(text, str):
+        raise InputError(where, f"must be the scene as JSON text, got {type(text).__name__}")
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        reason = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise InputError(where, f"must be the scene as JSON text (written by cracklab), not valid JSON: "
+                                f"{reason}") from None
+    if not isinstance(data, dict):
+        raise InputError(where, f"must be the scene as a JSON table, got {type(data).__name__}")
+    return data
+
+
 def read_toml_file(path, where: str | None = None) -> dict:
     """``read_toml`` of the file at ``path``; a file that cannot be read (none there, a
     directory, no permission) is one InputError naming ``where`` (default: the path)."""
@@ -467,7 +483,7 @@ def scene_from_dataset(ds):
     fields = _field_vars(ds)
     legacy = attrs.get("scene")
     if isinstance(legacy, str) and legacy.lstrip().startswith("{"):
-        data = json.loads(legacy)
+        data = read_scene_json(legacy)
         arrays = {f"input_{s}_{k}": v for (s, k), v in fields.items()}
         return scene_from_data(data, arrays)
     data: dict = {}

@@ -307,3 +307,23 @@ def test_a_huge_odd_grid_size_is_refused_at_once():
     assert time.perf_counter() - t0 < 5
     with pytest.raises(InputError, match=r"got 65534; nearest larger is 65536"):
         Grid(n1=65534, n3=1, L1=1.0, L3=1.0)
+
+
+def test_a_damaged_scene_attr_of_a_store_is_one_input_error(tmp_path):
+    """`cracklab run STORE` of a run store whose scene attr is not JSON (or nested too
+    deeply for the JSON decoder) gives one error line, not a JSONDecodeError."""
+    import zarr
+    from click.testing import CliRunner
+
+    import cracklab
+    from cracklab.cli import main
+
+    store = tmp_path / "run.zarr"
+    cracklab.simulate(small_scene(t_end=0.02), store=str(store))
+    for bad in ("{not json", "[" * 100000 + "]" * 100000, "[1, 2]"):
+        zarr.open_group(str(store), mode="a").attrs["scene"] = bad
+        res = CliRunner().invoke(main, ["run", str(store), "-o", str(tmp_path / "again.zarr")])
+        assert res.exit_code == 1 and isinstance(res.exception, SystemExit), res.output
+        lines = res.output.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("Error: scene: must be the scene as"), res.output
+        assert not (tmp_path / "again.zarr").exists()
