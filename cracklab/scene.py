@@ -44,8 +44,8 @@ class Numerics:
     product when a shear component is active, displacement otherwise. History ``engine``
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
-    T = q c_s t (None: full history; a window longer than the run truncates nothing); ``rupture_threshold``: a point has failed when
-    its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
+    T = q c_s t (None: full history; a window longer than the run truncates nothing);
+    ``rupture_threshold``: a point has failed when its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
     the exponential engine's loop unless ``engine_threads`` is given (the two scale
     differently: docs/performance.md). With two or more engine threads the exponential
     engine advances its recursive states on a thread of its own while the transforms and
