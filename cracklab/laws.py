@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, check_fields_nesting
 from . import loops
 
 NORMAL = (2,)
@@ -61,6 +61,7 @@ class TractionFree:
     components = ALL
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         if not isinstance(self.contact, (bool, np.bool_)):
             raise InputError("law.contact", f"must be true or false, got {self.contact!r}")
 
@@ -99,6 +100,7 @@ class LinearCohesive:
     contact = True
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         _check(self, "tau_c")
         _check(self, "delta_c")
 
@@ -139,6 +141,7 @@ class SlipWeakening:
     components = SHEAR
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         _check(self, "mu_s", allow_equal=True)
         _check(self, "mu_d", allow_equal=True)
         _check(self, "D_c")
@@ -194,6 +197,7 @@ class PrescribedRupture:
     contact = False
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         _check(self, "speed")
         _check(self, "residual", allow_equal=True)
         _check(self, "strength_before", allow_equal=True, allow_inf=True)
