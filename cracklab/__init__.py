@@ -15,7 +15,7 @@ _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from . import analysis, ensemble, kernels, scenes  # noqa: E402
 from .analysis import energy  # noqa: E402
-from .ensemble import open_ensemble  # noqa: E402
+from .ensemble import open_ensemble, register_builder  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
 from .model.grid import Grid  # noqa: E402
 from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree  # noqa: E402
@@ -29,6 +29,6 @@ from .output.simulate import scene_of, simulate, stations  # noqa: E402
 __all__ = [
     "Grid", "InputError", "LinearCohesive", "Loading", "Material", "Numerics", "PrescribedRupture",
     "Record", "Scene", "SimulationError", "SlipWeakening", "TractionFree", "analysis", "ensemble",
-    "kernels", "modal_response", "open_ensemble",
+    "kernels", "modal_response", "open_ensemble", "register_builder",
     "point_load", "scene_of", "scenes", "simulate", "stations", "__version__",
 ]

@@ -39,14 +39,9 @@ def _load_scene(path: str):
     from ..model.scene_io import scene_from_data
 
     if path.endswith(".toml"):
-        import tomllib
+        from ..model.scene_io import read_toml_file
 
-        try:
-            with open(path, "rb") as fh:
-                data = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(path, f"not valid TOML: {exc}") from None
-        return scene_from_data(data, {})
+        return scene_from_data(read_toml_file(path), {})
     import xarray as xr
 
     from ..output.simulate import scene_of
@@ -118,16 +113,27 @@ def run(scene: str, output: str, progress, checkpoint_every, resume) -> None:
 @click.option("--resume/--no-resume", default=True, show_default=True,
               help="Skip members already complete in OUTPUT.")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
-def sweep(study: str, output: str, scheduler, workers, resume, progress) -> None:
+@click.option("--import", "imports", multiple=True, metavar="MODULE",
+              help="Import this Python module first (repeatable): a module of yours that registers "
+                   "scene builders with cracklab.register_builder. A study file itself never imports "
+                   "code: it names only registered builders.")
+def sweep(study: str, output: str, scheduler, workers, resume, progress, imports) -> None:
     """Run the ensemble of STUDY (a STUDY.toml, see docs/ensembles.md) into OUTPUT.
 
     Exits with status 1 when a member failed (the failures are listed, and recorded
     with their error in the member's group); a rerun redoes only what is not complete.
     A second sweep into an OUTPUT that another sweep is running into is refused
     (a lock file in the store; a lock left by a killed sweep is taken over)."""
+    import importlib
+
     from ..ensemble import run_study
     from ..errors import InputError
 
+    for module in imports:
+        try:
+            importlib.import_module(module)
+        except Exception as exc:  # noqa: BLE001 - reported as one clear line
+            raise click.ClickException(f"--import: cannot import {module!r}: {type(exc).__name__}: {exc}") from None
     try:
         result = run_study(study, output, scheduler=scheduler, workers=workers, resume=resume,
                            progress=progress)

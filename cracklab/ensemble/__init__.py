@@ -39,7 +39,6 @@ import dataclasses
 import errno
 import functools
 import hashlib
-import importlib
 import inspect
 import itertools
 import json
@@ -67,15 +66,18 @@ SEED_BITS = 53          # seeds fit exactly in float64, int64 and JSON numbers
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",
            "run_study", "open_ensemble", "open_member", "member_status", "member_scene",
            "build_scene", "is_ensemble", "store_kind", "coordinate_name", "export_netcdf", "store_lock",
-           "StoreLocked"]
+           "StoreLocked", "register_builder", "unregister_builder", "registered_builders",
+           "resolve_builder", "ENTRY_POINT_GROUP"]
 
 
 # ---------------------------------------------------------------------------- specification
 class Builder:
     """A scene builder and its base arguments: ``Builder("asperity_row", n1=128, n3=64)``.
 
-    ``builder``: the name of a function of ``cracklab.scenes``, a "package.module:function"
-    reference, or such a function itself (it must be importable by the workers)."""
+    ``builder``: the name of a registered builder (one of cracklab's own, ``scenes.BUILDERS``,
+    one registered with ``register_builder``, or an entry point of the group
+    "cracklab.builders"), or a function (registered under its name, "module:qualname",
+    unless it is registered already)."""
 
     def __init__(self, builder, **args):
         self.name = builder_name(builder)
@@ -152,51 +154,157 @@ class SweepResult:
 
 
 # ---------------------------------------------------------------------------- builders
+ENTRY_POINT_GROUP = "cracklab.builders"
+_REGISTERED: dict = {}          # name -> function, from register_builder
+_ENTRY_POINT_CACHE: dict = {}   # (name, entry point value) -> loaded function
+
+
+def _own_builders() -> dict:
+    """cracklab's own builders: the functions of cracklab.scenes listed in scenes.BUILDERS."""
+    from .. import scenes
+
+    return {name: getattr(scenes, name) for name in scenes.BUILDERS}
+
+
+def _entry_points() -> dict:
+    """{name: entry point} of the group "cracklab.builders" (installed packages)."""
+    from importlib.metadata import entry_points
+
+    try:
+        eps = entry_points(group=ENTRY_POINT_GROUP)
+    except Exception:  # noqa: BLE001 - broken package metadata: no entry-point builders
+        return {}
+    return {ep.name: ep for ep in eps}
+
+
+def _same_function(a, b) -> bool:
+    """The same function, or the same module-level name (a module reloaded, a notebook cell
+    run again)."""
+    if a is b:
+        return True
+    key = (getattr(a, "__module__", None), getattr(a, "__qualname__", None))
+    return None not in key and "<" not in key[1] and \
+        key == (getattr(b, "__module__", None), getattr(b, "__qualname__", None))
+
+
+def register_builder(name, func=None, *, replace=False):
+    """Let study files and sweeps name the scene builder ``func`` as ``name``.
+
+    ``func(**arguments)`` must return a ``cracklab.Scene``. ``name`` is any non-empty
+    string other than the names of cracklab's own builders (``scenes.BUILDERS``), e.g.
+    ``"my_crack"`` or ``"mypackage.scenes:my_crack"``. Registering another function
+    under a name already taken needs ``replace=True``. Without ``func`` this is a
+    decorator: ``@cracklab.register_builder("my_crack")``. Returns ``func``.
+
+    A study file can name only registered builders: cracklab's own, those registered
+    here, and those of installed packages under the entry-point group
+    ``"cracklab.builders"`` (see docs/ensembles.md); it never imports a module itself.
+    The function object goes to the workers with each task (by reference when it is
+    importable there, else by value), so the workers need no registration."""
+    if func is None:
+        return functools.partial(register_builder, name, replace=replace)
+    if not isinstance(name, str) or not name.strip():
+        raise InputError("builder", f"a builder name must be a non-empty string, got {name!r}")
+    if not callable(func):
+        raise InputError("builder", f"{name!r}: a builder must be a function returning a Scene, got {func!r}")
+    if name in _own_builders():
+        raise InputError("builder", f"{name!r} is one of cracklab's own builders; register yours under "
+                                    f"another name")
+    old = _REGISTERED.get(name)
+    if old is not None and not replace and not _same_function(old, func):
+        raise InputError("builder", f"{name!r} is already registered to {_describe(old)}; pass replace=True "
+                                    f"to register {_describe(func)} instead")
+    _REGISTERED[name] = func
+    return func
+
+
+def unregister_builder(name) -> None:
+    """Forget a builder registered with ``register_builder`` (no error when there is none)."""
+    _REGISTERED.pop(name, None)
+
+
+def registered_builders() -> dict:
+    """{name: where it comes from} of every builder a study may name: "cracklab" (its own,
+    ``scenes.BUILDERS``), "registered" (``register_builder``), or "entry point
+    <package.module:function>" (group "cracklab.builders"; an entry point does not shadow
+    the others)."""
+    out = {name: "cracklab" for name in _own_builders()}
+    for name in _REGISTERED:
+        out.setdefault(name, "registered")
+    for name, ep in _entry_points().items():
+        out.setdefault(name, f"entry point {ep.value}")
+    return out
+
+
+def _describe(func) -> str:
+    module, qual = getattr(func, "__module__", None), getattr(func, "__qualname__", None)
+    return f"{module}:{qual}" if module and qual else repr(func)
+
+
 def builder_name(builder) -> str:
+    """The name of a builder: a string as given; for a function, the name it is
+    registered under (cracklab's own builders by their name), else "module:qualname",
+    under which it is registered now (a function given in Python is trusted)."""
     if isinstance(builder, str):
         return builder
     if callable(builder):
-        module, qual = builder.__module__, builder.__qualname__
-        if "<" in qual:
-            raise InputError("builder", f"must be an importable module-level function, got {qual}")
-        if module == "cracklab.scenes":
-            return qual
-        return f"{module}:{qual}"
+        for name, func in _own_builders().items():
+            if func is builder:
+                return name
+        for name, func in _REGISTERED.items():
+            if func is builder:
+                return name
+        module, qual = getattr(builder, "__module__", None), getattr(builder, "__qualname__", None)
+        if not module or not qual or "<" in qual:
+            raise InputError("builder", f"must be a module-level function, got {qual or builder!r}; give another "
+                                        f"function a name with cracklab.register_builder(name, function)")
+        name = f"{module}:{qual}"
+        register_builder(name, builder)
+        return name
     raise InputError("builder", f"must be a builder name or function, got {builder!r}")
 
 
-@functools.lru_cache(maxsize=64)
-def resolve_builder(name: str):
-    """The function called ``name``: cracklab.scenes.<name> or "module:function"."""
+def resolve_builder(name, field: str = "builder"):
+    """The function registered as ``name``: one of cracklab's own builders
+    (``scenes.BUILDERS``), one registered with ``register_builder``, or an entry point of
+    the group "cracklab.builders". Any other name, "package.module:function" included,
+    is an InputError naming ``field`` and the registered builders: a name never imports
+    a module nor reaches another attribute of cracklab.scenes."""
     if not isinstance(name, str) or not name:
-        raise InputError("builder", f"must be a non-empty string, got {name!r}")
-    if ":" in name:
-        module, _, qual = name.partition(":")
-        try:
-            obj = importlib.import_module(module)
-        except ImportError as exc:
-            raise InputError("builder", f"cannot import module {module!r}: {exc}") from None
-    else:
-        from .. import scenes as obj
-        qual = name
-    for part in qual.split("."):
-        obj = getattr(obj, part, None)
-        if obj is None:
-            break
-    if not callable(obj):
-        from .. import scenes
-
-        names = sorted(n for n, f in vars(scenes).items()
-                       if inspect.isfunction(f) and f.__module__ == scenes.__name__ and not n.startswith("_")
-                       and "t_end" in inspect.signature(f).parameters)
-        raise InputError("builder", f"{name!r} is not a scene builder; cracklab.scenes has {', '.join(names)} "
-                                    f"(or give 'package.module:function')")
-    return obj
+        raise InputError(field, f"must be the name of a registered scene builder, got {name!r}")
+    own = _own_builders()
+    if name in own:
+        return own[name]
+    if name in _REGISTERED:
+        return _REGISTERED[name]
+    ep = _entry_points().get(name)
+    if ep is not None:
+        key = (name, ep.value)
+        if key not in _ENTRY_POINT_CACHE:
+            try:
+                func = ep.load()
+            except Exception as exc:  # noqa: BLE001 - reported as one clear line
+                raise InputError(field, f"{name!r}: the entry point {ep.value!r} (group {ENTRY_POINT_GROUP!r}) "
+                                        f"cannot be loaded: {type(exc).__name__}: {exc}") from None
+            if not callable(func):
+                raise InputError(field, f"{name!r}: the entry point {ep.value!r} (group {ENTRY_POINT_GROUP!r}) "
+                                        f"is not a function")
+            _ENTRY_POINT_CACHE[key] = func
+        return _ENTRY_POINT_CACHE[key]
+    names = sorted(registered_builders())
+    shown = repr(name) if len(name) <= 80 else repr(name[:77] + "...")
+    raise InputError(field, f"{shown} is not a scene builder registered with cracklab; registered: "
+                            f"{', '.join(names)}. Register your own in Python with "
+                            f"cracklab.register_builder(name, function), or in an installed package "
+                            f"under the entry-point group {ENTRY_POINT_GROUP!r}")
 
 
 def _accepts(func):
     """(names of keyword parameters, accepts **kwargs)."""
-    sig = inspect.signature(func)
+    try:
+        sig = inspect.signature(func)
+    except (TypeError, ValueError):     # no signature to read (some built-in callables)
+        return set(), True
     names = {p.name for p in sig.parameters.values()
              if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)}
     return names, any(p.kind == p.VAR_KEYWORD for p in sig.parameters.values())
@@ -344,6 +452,9 @@ def plan(base_scene, sweep) -> list[Member]:
     if not combos:
         combos.append(("base", {}))
 
+    if "builder" in base_args:
+        raise InputError("base.builder", "the builder is named by the study ([study] builder, or Builder(...)) "
+                                         "or by a member, not among the base parameters")
     members, seen = [], {}
     for where, given in combos:
         builder = given.get("builder", default_builder)
@@ -352,7 +463,11 @@ def plan(base_scene, sweep) -> list[Member]:
             given["builder"] = builder
         if default_builder is None and "builder" in given:
             raise InputError(f"{where}.builder", "a member of a sweep over a base Scene cannot name a builder")
-        accepted, varkw = _accepts(resolve_builder(builder)) if builder is not None else (set(), False)
+        if builder is not None:
+            func = resolve_builder(builder, f"{where}.builder" if "builder" in given else "builder")
+            accepted, varkw = _accepts(func)
+        else:
+            accepted, varkw = set(), False
         params = {}
         if builder is not None:
             params["builder"] = builder
@@ -429,17 +544,20 @@ def apply_paths(scene, paths: dict):
     return scene.replace(**changes) if changes else scene
 
 
-def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1):
+def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1, builders: dict | None = None):
     """The Scene of one member: the builder called with its arguments (or the base Scene),
     then the scene paths applied. ``fft_threads`` sets numerics.fft_threads unless the
-    member sets it (None: leave it)."""
+    member sets it (None: leave it). ``builders``: {name: function} to use for these
+    names (what a worker is sent); other names are resolved with ``resolve_builder``."""
     from ..model.scene import Scene
 
     params = dict(params)
     if isinstance(base_scene, Scene):
         scene, paths = base_scene, params
     else:
-        func = resolve_builder(params.pop("builder"))
+        name = params.pop("builder")
+        func = (builders or {}).get(name) if isinstance(name, str) else None
+        func = func or resolve_builder(name)
         accepted, varkw = _accepts(func)
         args = {k: _decode(v) for k, v in params.items() if not _is_path(k) and (k in accepted or varkw)}
         paths = {k: v for k, v in params.items() if k not in args}
@@ -766,7 +884,7 @@ def _swap_in(new: str, path: str):
     shutil.rmtree(old, ignore_errors=True)
 
 
-def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
+def _run_member(store: str, member: Member, base, fft_threads=1, builders=None) -> dict:
     """Worker task: build, run and write one member; mark it complete last. Never raises
     for a member's own failure: the error goes to the member's attrs and the result.
 
@@ -774,7 +892,8 @@ def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
     for readers: the new run is written to a hidden sibling group and swapped in when
     complete (or failed), so that a reader never finds a group marked complete whose
     arrays are being rewritten. Other groups (absent, failed, interrupted, damaged:
-    none marked complete) are cleared and written in place."""
+    none marked complete) are cleared and written in place. ``builders``: {name: function}
+    of the member's builder, resolved by the client (a worker has no registrations of its own)."""
     t0 = time.perf_counter()
     os.environ.setdefault("CRACKLAB_FFT_THREADS", "1")
     path = member_path(store, member.id)
@@ -793,7 +912,7 @@ def _run_member(store: str, member: Member, base, fft_threads=1) -> dict:
                 target = f"{_store_str(store)}/{MEMBERS}/.{member.id}{SWAP_TAG}{os.urandom(4).hex()}"
         g = _open_group(target, "w")          # clears whatever an earlier attempt left
         g.attrs.update({**meta, "status": "running", "complete": False})
-        scene = build_scene(base, member.params, fft_threads=fft_threads)
+        scene = build_scene(base, member.params, fft_threads=fft_threads, builders=builders)
         simulate(scene, store=target)
         g = _open_group(target, "a")
         elapsed = time.perf_counter() - t0
@@ -905,11 +1024,22 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
     if progress is None:
         progress = sys.stderr.isatty()
     base = base_scene if isinstance(base_scene, Scene) else None
+    # the builders were resolved by plan (only registered ones); each task carries its own
+    funcs = {}
+    for m in todo:
+        name = m.params.get("builder")
+        if name is not None and name not in funcs:
+            funcs[name] = resolve_builder(name)
+
+    def own(m):
+        name = m.params.get("builder")
+        return {name: funcs[name]} if name is not None else None
+
     if todo and client is None and scheduler == "synchronous":
         from tqdm import tqdm
 
         for m in tqdm(todo, desc="members", unit="member", disable=not progress, file=sys.stderr):
-            r = _run_member(store, m, base, fft_threads)
+            r = _run_member(store, m, base, fft_threads, own(m))
             if r["status"] != "complete":
                 result.failed[m.id] = r.get("error", "failed")
     elif todo:
@@ -925,7 +1055,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                   file=sys.stderr, flush=True)
         with _client(client, scheduler, workers, len(todo)) as c:
             base_arg = c.scatter(base, broadcast=True) if base is not None else None
-            futures = {c.submit(_run_member, store, m, base_arg, fft_threads, pure=False,
+            futures = {c.submit(_run_member, store, m, base_arg, fft_threads, own(m), pure=False,
                                 key=f"cracklab-member-{m.id}-{os.urandom(3).hex()}"): m for m in todo}
             bar = tqdm(total=len(todo), desc="members", unit="member", disable=not progress,
                        file=sys.stderr, dynamic_ncols=True)
@@ -994,7 +1124,7 @@ def load_study(path) -> Study:
 
         [study]
         name = "asperity_ensemble"
-        builder = "asperity_row"        # cracklab.scenes.<name> or "module:function"
+        builder = "asperity_row"        # a registered builder (ensemble.registered_builders())
         # scene = "base.toml"           # or: a base scene file (then only scene paths)
         entropy = 2024                  # SeedSequence root for builders taking `seed`
         [base]                          # base builder arguments and scene paths
@@ -1006,20 +1136,21 @@ def load_study(path) -> Study:
         [[members]]                     # explicit members (merged over [base])
         builder = "random_toughness"
     """
-    import tomllib
-
-    from ..model.scene_io import scene_from_toml
+    from ..model.scene_io import read_toml_file, scene_from_data
 
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputError(str(path), "no such study file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(str(path), f"not valid TOML: {exc}") from None
+    if not path.exists():
+        raise InputError(str(path), "no such study file")
+    data = read_toml_file(path)
     for key in data:
         if key not in ("study", "base", "sweep", "members"):
             raise InputError(key, "unknown table; accepted: study, base, sweep, members")
+    for key in ("study", "base", "sweep"):
+        if not isinstance(data.get(key, {}), dict):
+            raise InputError(key, f"must be a table [{key}], got {data[key]!r}")
+    members = data.get("members", [])
+    if not isinstance(members, list) or not all(isinstance(m, dict) for m in members):
+        raise InputError("members", "must be an array of tables [[members]]")
     study = data.get("study", {})
     for key in study:
         if key not in STUDY_KEYS:
@@ -1028,16 +1159,21 @@ def load_study(path) -> Study:
         raise InputError("study.builder", "give exactly one of study.builder and study.scene")
     base = _flatten(data.get("base", {}), "base")
     if "builder" in study:
+        if not isinstance(study["builder"], str):
+            raise InputError("study.builder", f"must be the name of a registered scene builder, got "
+                                              f"{study['builder']!r}")
+        resolve_builder(study["builder"], "study.builder")     # before anything else is done
         builder = Builder(study["builder"])
     else:
+        if not isinstance(study["scene"], str):
+            raise InputError("study.scene", f"must be the path of a scene TOML file, got {study['scene']!r}")
         scene_path = (path.parent / study["scene"])
-        try:
-            builder = scene_from_toml(scene_path.read_text())
-        except FileNotFoundError:
-            raise InputError("study.scene", f"no such scene file {scene_path}") from None
-    members = data.get("members", [])
-    if not isinstance(members, list):
-        raise InputError("members", "must be an array of tables [[members]]")
+        if not scene_path.is_file():
+            raise InputError("study.scene", f"no such scene file {scene_path}")
+        builder = scene_from_data(read_toml_file(scene_path, "study.scene"))
+    for key in ("name", "seed_arg", "description"):
+        if key in study and not isinstance(study[key], str):
+            raise InputError(f"study.{key}", f"must be a string, got {study[key]!r}")
     sweep = Sweep(product=_flatten(data.get("sweep", {}), "sweep"),
                   members=[_flatten(m, f"members[{i}]") for i, m in enumerate(members)],
                   entropy=study.get("entropy"), replicates=study.get("replicates", 1),

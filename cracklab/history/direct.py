@@ -47,7 +47,15 @@ class DirectEngine:
         self.cap = None
         positive = self.gamma[self.gamma > 0]
         if window is not None and positive.size:
-            self.cap = int(np.ceil(window / positive.min())) + 1
+            from ..scene import MAX_STEPS
+
+            # steps until the mode of smallest gamma reaches T = window; a window longer
+            # than the run (or than any run) truncates no buffer: the whole history is kept
+            # (grown as the run goes, as without a window), and the weights of every mode
+            # still end at T = window (_weights)
+            span = float(window) / float(positive.min())
+            limit = (MAX_STEPS if nsteps is None else int(nsteps)) + 2
+            self.cap = int(np.ceil(span)) + 1 if span + 1 <= limit else None
         m = self.gamma.size
         self._w2 = np.empty((0, 2 * m))
         self._bufcap = self.cap or self.chunk
@@ -61,7 +69,7 @@ class DirectEngine:
 
         w = weight_table(self.kernel, self._ug, j0 + self.lag, j1 + self.lag, nu=self.nu, rule=self.rule,
                          formulation=self.formulation)
-        if self.cap is not None:
+        if self.window is not None:
             # truncate each mode at its own window T <= window
             j = np.arange(j0, j1)[:, None] + self.lag
             w = np.where(j * self._ug[None, :] <= self.window, w, 0.0)

@@ -5,6 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import check_fields_nesting
 from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
 
 
@@ -21,6 +22,7 @@ class ConstantFriction(Law):
     reads_slip = False
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         check_parameter(self, "mu_f", allow_equal=True)
         check_parameter(self, "sigma_n", allow_equal=True)
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 from .base import NORMAL, Law, bonded_mask, check_parameter, parameter
 
 
@@ -30,6 +30,7 @@ class LinearCohesive(Law):
     energy_state = "delta_max"
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         check_parameter(self, "tau_c")
         check_parameter(self, "delta_c")
 

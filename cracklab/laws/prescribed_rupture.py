@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 from .base import ALL, Law, bonded_mask, check_parameter, parameter
 
 
@@ -32,6 +32,7 @@ class PrescribedRupture(Law):
     contact = False
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         check_parameter(self, "speed")
         check_parameter(self, "residual", allow_equal=True)
         check_parameter(self, "strength_before", allow_equal=True, allow_inf=True)

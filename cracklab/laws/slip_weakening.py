@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
 
 
@@ -29,6 +29,7 @@ class SlipWeakening(Law):
     energy_state = "slip"
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         check_parameter(self, "mu_s", allow_equal=True)
         check_parameter(self, "mu_d", allow_equal=True)
         check_parameter(self, "D_c")

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 from .base import ALL, Law, bonded_mask, parameter
 
 
@@ -20,6 +20,7 @@ class TractionFree(Law):
     components = ALL
 
     def __post_init__(self):
+        check_fields_nesting(self, "law")
         if not isinstance(self.contact, (bool, np.bool_)):
             raise InputError("law.contact", f"must be true or false, got {self.contact!r}")
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_positive
+from ..errors import InputError, check_fields_nesting, check_positive
 
 
 MAX_NODES_PER_AXIS = 2**16
@@ -51,17 +51,18 @@ class Grid:
     L3: float
 
     def __post_init__(self):
+        check_fields_nesting(self, "grid")
         n1 = _check_size("grid.n1", self.n1)
         n3 = _check_size("grid.n3", self.n3)
         for name, n in (("grid.n1", n1), ("grid.n3", n3)):
             if name == "grid.n3" and n == 1:
                 continue
             if n < 2 or n % 2 or not is_fast_size(n):
-                raise InputError(
-                    name,
-                    f"must be an even fast FFT size (2^a 3^b 5^c 7^d, >= 2), got {n}; "
-                    f"nearest larger is {next_fast_size(n)}",
-                )
+                # the next fast size is searched only within the accepted sizes: near 2^63 the
+                # fast sizes lie so far apart that the search would not end
+                nearest = f"; nearest larger is {next_fast_size(n)}" if n <= MAX_NODES_PER_AXIS else \
+                    f"; at most {MAX_NODES_PER_AXIS}"
+                raise InputError(name, f"must be an even fast FFT size (2^a 3^b 5^c 7^d, >= 2), got {n}{nearest}")
         if n1 > MAX_NODES_PER_AXIS or n3 > MAX_NODES_PER_AXIS:
             name, n = ("grid.n1", n1) if n1 > MAX_NODES_PER_AXIS else ("grid.n3", n3)
             raise InputError(name, f"must be <= {MAX_NODES_PER_AXIS}, got {n}")
@@ -122,9 +123,17 @@ class Grid:
         return np.meshgrid(k, m, indexing="ij")
 
     def q_max(self) -> float:
-        """Largest wave-vector magnitude on the grid."""
-        k, m = self.wavenumbers()
-        return float(np.sqrt(k**2 + m**2).max())
+        """Largest wave-vector magnitude on the grid: the same number as the maximum of
+        sqrt(k^2 + m^2) over ``wavenumbers()``, from the two axes alone (rounding is
+        monotone, so the maximum is at the largest k^2 and m^2): O(n1 + n3), not a
+        field of n1 n3 values, when a scene is validated."""
+        if self.plane:
+            k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
+            m = np.zeros(1)
+        else:
+            k = 2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1)
+            m = 2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3)
+        return float(np.sqrt((k**2).max() + (m**2).max()))
 
     def nearest_node(self, x1: float, x3: float = 0.0) -> tuple[int, int]:
         i = int(round(x1 / self.dx1)) % self.n1

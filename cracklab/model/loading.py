@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_positive
+from ..errors import InputError, check_fields_nesting, check_positive
 
 TIME_FUNCTIONS = ("step", "ramp", "smooth")
 
@@ -28,6 +28,7 @@ class Loading:
     l0: float | None = None
 
     def __post_init__(self):
+        check_fields_nesting(self, "loading")
         if not isinstance(self.time, str) or self.time not in TIME_FUNCTIONS:
             raise InputError("loading.time", f"must be one of {TIME_FUNCTIONS}, got {self.time!r}")
         if isinstance(self.ramp_time, (bool, np.bool_)):

@@ -6,7 +6,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..errors import InputError, check_positive
+from ..errors import InputError, check_fields_nesting, check_positive
 
 
 @dataclass(frozen=True)
@@ -18,6 +18,7 @@ class Material:
     nu: float
 
     def __post_init__(self):
+        check_fields_nesting(self, "material")
         for name in ("mu", "cs", "nu"):
             if isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(f"material.{name}", f"must be a number, got {getattr(self, name)!r}")

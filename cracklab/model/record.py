@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 
 FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
 
@@ -31,6 +31,7 @@ class Record:
     stations: dict | None = None
 
     def __post_init__(self):
+        check_fields_nesting(self, "record")
         if isinstance(self.fields, str):
             object.__setattr__(self, "fields", (self.fields,))
         if not isinstance(self.fields, (list, tuple, np.ndarray)):
@@ -89,7 +90,8 @@ class Record:
         if self.times is not None:
             for t in self.times:
                 if not 0 <= t <= nsteps * dt * (1 + 1e-12):
-                    raise InputError("record.times", f"must lie in [0, t_end = {nsteps * dt:g}], got {t:g}")
+                    raise InputError("record.times", f"must lie in [0, t_end = {nsteps * dt:.6g}] (the end of the "
+                                                     f"last of {nsteps} steps of dt = {dt:.6g}), got {t:.6g}")
             return np.unique(np.rint(np.asarray(self.times) / dt).astype(int))
         every = self.every or max(1, nsteps // 20)
         steps = np.arange(0, nsteps + 1, every)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import InputError, check_positive
+from ..errors import InputError, check_fields_nesting, check_positive
 from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .loading import Loading
@@ -45,8 +45,8 @@ class Numerics:
     product when a shear component is active, displacement otherwise. History ``engine``
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
-    T = q c_s t (None: full history); ``rupture_threshold``: a point has failed when
-    its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
+    T = q c_s t (None: full history; a window longer than the run truncates nothing);
+    ``rupture_threshold``: a point has failed when its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
     the exponential engine's loop unless ``engine_threads`` is given (the two scale
     differently: docs/performance.md). With two or more engine threads the exponential
     engine advances its recursive states on a thread of its own while the transforms and
@@ -61,6 +61,7 @@ class Numerics:
     engine_threads: int | None = None
 
     def __post_init__(self):
+        check_fields_nesting(self, "numerics")
         from ..history import ENGINES
 
         if not isinstance(self.engine, str) or (self.engine not in ENGINES and self.engine != "auto"):
@@ -105,6 +106,7 @@ class Scene:
     name: str = "scene"
 
     def __post_init__(self):
+        check_fields_nesting(self, "")
         for name, cls in (("material", Material), ("grid", Grid), ("loading", Loading),
                           ("record", Record), ("numerics", Numerics)):
             if not isinstance(getattr(self, name), cls):
@@ -149,6 +151,9 @@ class Scene:
             raise InputError("t_end", f"must be at most {MAX_STEPS:.0e} time steps of dt = beta min(dx1, dx3) / cs "
                                       f"= {self.dt:.6g}, i.e. t_end <= {MAX_STEPS * self.dt:.6g}, got {self.t_end!r} "
                                       f"({steps:.3g} steps)")
+        if self.nsteps < 1:
+            raise InputError("t_end", f"must hold at least one time step, t_end >= dt = beta min(dx1, dx3) / cs "
+                                      f"= {self.dt:.6g}, got {self.t_end!r}")
         if self.record.fields and self.record.times is None:
             every = self.record.every or max(1, self.nsteps // 20)
             if self.nsteps // every + 1 > MAX_SNAPSHOTS:

@@ -30,7 +30,7 @@ import numbers
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import MAX_NESTING, InputError, check_nesting
 from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .units import input_unit
@@ -163,15 +163,66 @@ def scene_to_toml(scene) -> str:
     return tomli_w.dumps(data)
 
 
-def scene_from_toml(text: str):
-    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``."""
+def read_scene_json(text, where: str = "scene") -> dict:
+    """The scene of a run's ``scene`` attr (JSON text): a damaged attr (not JSON, nested
+    too deeply for the decoder, not a table) is one InputError naming ``where``."""
+    if not isinstance(text, str):
+        raise InputError(where, f"must be the scene as JSON text, got {type(text).__name__}")
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        reason = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise InputError(where, f"must be the scene as JSON text (written by cracklab), not valid JSON: "
+                                f"{reason}") from None
+    if not isinstance(data, dict):
+        raise InputError(where, f"must be the scene as a JSON table, got {type(data).__name__}")
+    return data
+
+
+def read_toml_file(path, where: str | None = None) -> dict:
+    """``read_toml`` of the file at ``path``; a file that cannot be read (none there, a
+    directory, no permission) is one InputError naming ``where`` (default: the path)."""
+    where = str(path) if where is None else where
+    try:
+        with open(path, "rb") as fh:
+            raw = fh.read()
+    except FileNotFoundError:
+        raise InputError(where, "no such file") from None
+    except OSError as exc:
+        raise InputError(where, f"cannot be read: {exc.strerror or exc}") from None
+    return read_toml(raw, where)
+
+
+def read_toml(source, where: str = "toml") -> dict:
+    """The tables of a TOML document (``source``: text, or the bytes of a file), checked
+    for nesting (``check_nesting``). Bytes that are not UTF-8 text (a binary file), malformed
+    TOML, and arrays nested too deeply for the parser each end in one InputError naming
+    ``where`` (or the field)."""
     import tomllib
 
+    if isinstance(source, (bytes, bytearray, memoryview)):
+        try:
+            source = bytes(source).decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InputError(where, f"not valid TOML: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at "
+                                    f"offset {exc.start}); the file must be TOML text, not binary") from None
+    if not isinstance(source, str):
+        raise InputError(where, f"must be TOML text, got {type(source).__name__}")
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(source)
     except tomllib.TOMLDecodeError as exc:
-        raise InputError("toml", f"not valid TOML: {exc}") from None
-    return scene_from_data(data)
+        raise InputError(where, f"not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(where, f"not valid TOML: arrays or tables nested too deeply (more than "
+                                f"{MAX_NESTING} levels are refused)") from None
+    check_nesting(data)
+    return data
+
+
+def scene_from_toml(text):
+    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``
+    (``text``: the TOML text, or the bytes of a file)."""
+    return scene_from_data(read_toml(text, "toml"))
 
 
 def _field_attrs(scene, section, key):
@@ -347,6 +398,7 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     arrays = arrays or {}
     if not isinstance(data, dict):
         raise InputError("scene", f"must be a table, got {type(data).__name__}")
+    check_nesting(data)
     allowed = set(SECTIONS) | set(TOP)
     for key in data:
         if key not in allowed:
@@ -426,7 +478,7 @@ def scene_from_dataset(ds):
     fields = _field_vars(ds)
     legacy = attrs.get("scene")
     if isinstance(legacy, str) and legacy.lstrip().startswith("{"):
-        data = json.loads(legacy)
+        data = read_scene_json(legacy)
         arrays = {f"input_{s}_{k}": v for (s, k), v in fields.items()}
         return scene_from_data(data, arrays)
     data: dict = {}

@@ -1,7 +1,6 @@
 """Run a scene and return (or stream to Zarr) a labelled xarray Dataset."""
 from __future__ import annotations
 
-import json
 import warnings
 
 import numpy as np
@@ -403,6 +402,10 @@ def stations(result) -> xr.Dataset:
 
 def scene_of(result):
     """The scene that produced ``result`` (from its attrs and input variables)."""
-    data = json.loads(result.attrs["scene"])
+    from ..model.scene_io import read_scene_json
+
+    if "scene" not in result.attrs:
+        raise InputError("scene", "this Dataset holds no 'scene' attribute: it is not the output of a cracklab run")
+    data = read_scene_json(result.attrs["scene"])
     arrays = {n: np.asarray(result[n].values) for n in result.data_vars if n.startswith("input_")}
     return scene_from_data(data, arrays)

@@ -16,6 +16,13 @@ from ..solver.stability import beta_max
 
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 
+# The scene builders a study file may name (cracklab.ensemble.resolve_builder): exactly
+# these functions of this module, by name. No other name of the module (a helper, or
+# ``np`` imported above) is reachable from a study; further builders are registered
+# explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "asperity_row",
+            "random_toughness")
+
 
 def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
     """Lamb's problem (section 3.2): unit square, point load P = 1 at node (n//2, n//2),

@@ -29,6 +29,7 @@ def flaky_crack(*, n=16, p=1.0, t_end=0.06, fail_flag=""):
 
 
 FLAKY = "test_ensemble:flaky_crack"
+E.register_builder(FLAKY, flaky_crack)      # study files name only registered builders
 
 
 @pytest.fixture(scope="module")

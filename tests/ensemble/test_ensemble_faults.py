@@ -80,6 +80,12 @@ def slow_crack(*, n=16, p=1.0, t_end=0.1, wait_for=""):
     return _small(n, p, t_end)
 
 
+# study files name only registered builders (a `cracklab sweep` process registers these
+# with --import test_ensemble_faults)
+E.register_builder("test_ensemble_faults:killer_crack", killer_crack)
+E.register_builder("test_ensemble_faults:slow_crack", slow_crack)
+
+
 def _reference(scene):
     return cracklab.simulate(scene)
 
@@ -151,7 +157,7 @@ wait_for = "%s"
 
 def _sweep_cmd(study, store):
     return [sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", str(store),
-            "--scheduler", "synchronous", "--no-progress"]
+            "--scheduler", "synchronous", "--no-progress", "--import", "test_ensemble_faults"]
 
 
 def _env():
