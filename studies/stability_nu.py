@@ -1,5 +1,5 @@
 """Stability limit of each grid scheme and Fourier-mode kernel against Poisson's ratio
-(docs/stability.md, "Limits for every Poisson ratio"; tabulated in cracklab/stability.py).
+(docs/stability.md, "Limits for every Poisson ratio"; tabulated in cracklab/solver/stability.py).
 
 For each time scheme a Scene can run (displacement / trapezoid / explicit, velocity /
 discretized / semi-implicit, product / piecewise-linear / one predictor-corrector pass),
@@ -19,7 +19,7 @@ bisection between the last stable and the first unstable gamma of the scan to 1e
     .venv/bin/python studies/stability_nu.py --from-json docs/figures/stability_nu.json
 
 Writes docs/figures/stability_nu.json (every limit with the scan's rates) and
-docs/figures/stability_nu.png, and prints the table that cracklab/stability.py holds.
+docs/figures/stability_nu.png, and prints the table that cracklab/solver/stability.py holds.
 """
 from __future__ import annotations
 

@@ -47,7 +47,7 @@ class DirectEngine:
         self.cap = None
         positive = self.gamma[self.gamma > 0]
         if window is not None and positive.size:
-            from ..scene import MAX_STEPS
+            from ..model.scene import MAX_STEPS
 
             # steps until the mode of smallest gamma reaches T = window; a window longer
             # than the run (or than any run) truncates no buffer: the whole history is kept
