@@ -22,7 +22,7 @@ class DirectEngine:
 
     ``gamma`` holds q c_s dt for each mode (any shape); the weights are those of
     Eqs. (45)-(47) for the given kernel, rule and formulation (or, with rule "product",
-    the product-integration weights of cracklab.analysis.modal.product_weights), shifted by ``lag``
+    the product-integration weights of cracklab.solver.weights.product_weights), shifted by ``lag``
     (lag = 1 gives sum_{j>=1} w_j x_{n-j} when x_{n-1} is pushed at step n).
     ``window`` truncates the history at T = q c_s t <= window (None: untruncated).
 
@@ -155,7 +155,7 @@ class DirectEngine:
 
         Tabulated ``chunk`` values of n at a time per distinct gamma, so that consecutive
         steps evaluate no kernel."""
-        from ..analysis.modal import product_weights
+        from ..solver.weights import product_weights
 
         tab = getattr(self, "_e0tab", None)
         if tab is None or not tab[0] <= n < tab[0] + tab[1].shape[0]:

@@ -10,7 +10,7 @@ J0 = ceil(T0 / gamma) (+1 for the product rule, whose weight w_k reaches back to
 rounded up to a small set of levels, and >= lag + 1):
 
 * k = j + lag < J0: the exact weights (:func:`cracklab.solver.weights.convolution_weights`, or
-  :func:`cracklab.analysis.modal.product_weights`) against a ring buffer of the mode's recent values
+  :func:`cracklab.solver.weights.product_weights`) against a ring buffer of the mode's recent values
   ("direct taps");
 * k >= J0: the weight of the rule applied to the fitted kernel,
   ``w_k = 2 Re sum_p c_p f_p rho_p^(k - shift)`` with ``rho_p = exp(lambda_p gamma)`` and the
@@ -128,7 +128,7 @@ def _start_factor(z):
 def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
     """The exact weights w_k (or, with part "start0", the product rule's E_0(k))."""
     if rule == "product":
-        from ..analysis.modal import product_weights
+        from ..solver.weights import product_weights
 
         return product_weights(kernel, g, np.asarray(k, dtype=np.int64), nu=nu, order=1, part=part)
     return convolution_weights(kernel, g, k, nu=nu, rule=rule, formulation=formulation)

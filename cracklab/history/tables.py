@@ -49,7 +49,7 @@ def digest(a) -> str:
 def _compute(kernel, gamma, j0, j1, nu, rule, formulation):
     j = np.arange(j0, j1)[:, None]
     if rule == "product":
-        from ..analysis.modal import product_weights
+        from ..solver.weights import product_weights
 
         w = product_weights(kernel, gamma[None, :], j, nu=nu, order=1, part="lag")
     else:

@@ -102,7 +102,7 @@ class Response:
             z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
             ch = _Channel(kernel, eng, 0.5 * mu / material.cs * gamma, static=-0.5 * mu * q * z0)
             if formulation == "product":
-                from ..analysis.modal import product_weights
+                from .weights import product_weights
 
                 w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
                 ch.K = ch.pre * (w0 - 0.5 * z0)
