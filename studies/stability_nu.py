@@ -39,7 +39,7 @@ try:
 except ImportError:  # run from a checkout without installing
     sys.path.insert(0, str(ROOT))
 
-from cracklab.analysis.modal import long_time_period, modal_response  # noqa: E402
+from cracklab.analysis.modal import envelope_growth, modal_response  # noqa: E402
 from cracklab.solver.stability import GROWTH_TOLERANCE, NU_NODES, SCHEMES  # noqa: E402
 
 MODES = ("I", "II", "III")
@@ -55,21 +55,8 @@ QUICK_NUS = (0.0, 0.25, 0.3, 0.45)
 def growth(scheme, mode, gamma, nu, T_end=T_END):
     """Growth per unit T of the single-mode response (inf on overflow)."""
     formulation, convolution, integration = SCHEMES[scheme]
-    out = modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
-                         convolution=convolution, integration=integration)
-    T, y = out["T"].values, np.abs(out.values)
-    if not np.all(np.isfinite(y)):
-        return math.inf
-    if mode == "III":
-        y = y * np.sqrt(T)
-    P = long_time_period(mode, nu)
-    tm, ym = [], []
-    for a in np.arange(0.5 * T[-1], T[-1] - P + 1e-9, P):
-        sel = (T >= a) & (T < a + P)
-        k = int(np.argmax(y[sel]))
-        tm.append(T[sel][k])
-        ym.append(y[sel][k])
-    return float(np.polyfit(tm, np.log(ym), 1)[0])
+    return envelope_growth(modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
+                                          convolution=convolution, integration=integration))
 
 
 def limit(scheme, mode, nu, T_end=T_END):

@@ -608,6 +608,29 @@ def long_time_period(mode, nu=0.25) -> float:
     return 2.0 * math.pi / _rayleigh_ratio(nu)
 
 
+def envelope_growth(r, *, t0=None) -> float:
+    """Growth per unit T of the envelope of a response of :func:`modal_response`: the slope
+    of ln(max |r| per period) against T over [t0, T_end] (default t0 = T_end / 2), the
+    period being that of the long-time oscillation (2 pi / s_R for modes I and II, 2 pi for
+    mode III); for mode III, |r| sqrt(T), the rate relative to the T^-1/2 decay of J0.
+    inf when the response overflowed. The measure of docs/stability.md."""
+    mode, nu = r.attrs["mode"], r.attrs["nu"]
+    T, y = r["T"].values, np.abs(r.values)
+    if not np.all(np.isfinite(y)):
+        return math.inf
+    if mode == "III":
+        y = y * np.sqrt(T)
+    P = long_time_period(mode, nu)
+    start = 0.5 * T[-1] if t0 is None else float(t0)
+    tm, ym = [], []
+    for a in np.arange(start, T[-1] - P + 1e-9, P):
+        sel = (T >= a) & (T < a + P)
+        k = int(np.argmax(y[sel]))
+        tm.append(T[sel][k])
+        ym.append(y[sel][k])
+    return float(np.polyfit(tm, np.log(ym), 1)[0])
+
+
 def precision_factor(r, nu=None, period=10, *, mode=None, method="max") -> float:
     """Precision factor of Fig. 6: numerical over exact long-time amplitude in one period.
 

@@ -22,6 +22,7 @@ from cracklab.analysis import exact
 from cracklab.errors import InputError
 from cracklab.analysis.modal import (
     STABLE_SCHEME,
+    envelope_growth,
     implicit_coefficient,
     long_time_period,
     modal_response,
@@ -41,20 +42,7 @@ GROWTH_TOL = 1e-5
 def growth(mode, gamma, T_end, scheme, **kw):
     """Slope of ln(max |r| per period) over [T_end/2, T_end]; mode III uses |r| sqrt(T)
     (the rate relative to the T^-1/2 decay of J0).  inf if the run overflowed."""
-    r = modal_response(mode, gamma=gamma, T_end=T_end, nu=NU, **scheme, **kw)
-    T, y = r["T"].values, np.abs(r.values)
-    if not np.all(np.isfinite(y)):
-        return math.inf
-    if mode == "III":
-        y = y * np.sqrt(T)
-    P = long_time_period(mode, NU)
-    tm, ym = [], []
-    for a in np.arange(0.5 * T_end, T[-1] - P + 1e-9, P):
-        sel = (T >= a) & (T < a + P)
-        k = np.argmax(y[sel])
-        tm.append(T[sel][k])
-        ym.append(y[sel][k])
-    return float(np.polyfit(tm, np.log(ym), 1)[0])
+    return envelope_growth(modal_response(mode, gamma=gamma, T_end=T_end, nu=NU, **scheme, **kw))
 
 
 # ----------------------------------------------------------------------------- the problem

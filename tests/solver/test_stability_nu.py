@@ -19,7 +19,7 @@ import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene
 from cracklab.errors import InputError, SimulationError
 from cracklab.laws import TractionFree
-from cracklab.analysis.modal import long_time_period, modal_response
+from cracklab.analysis.modal import envelope_growth, modal_response
 from cracklab.solver.stability import GROWTH_TOLERANCE, SAFETY, SCHEMES, beta_max, gamma_max
 
 NUS = (0.1, 0.25, 0.3, 0.35, 0.45)
@@ -32,18 +32,8 @@ LOAD = {"displacement": (2,), "velocity": (2,), "product": (1, 3)}
 def modal_growth(scheme, mode, gamma, nu, T_end=2000.0):
     """Growth per unit T of the envelope over [T_end/2, T_end] (studies/stability_nu.py's measure)."""
     formulation, convolution, integration = SCHEMES[scheme]
-    out = modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
-                         convolution=convolution, integration=integration)
-    T, y = out["T"].values, np.abs(out.values)
-    if not np.all(np.isfinite(y)):
-        return math.inf
-    if mode == "III":
-        y = y * np.sqrt(T)
-    P = long_time_period(mode, nu)
-    peaks = [(T[s][np.argmax(y[s])], y[s].max()) for a in np.arange(T[-1] / 2, T[-1] - P, P)
-             for s in [(T >= a) & (T < a + P)]]
-    tm, ym = np.array(peaks).T
-    return float(np.polyfit(tm, np.log(ym), 1)[0])
+    return envelope_growth(modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
+                                          convolution=convolution, integration=integration))
 
 
 @pytest.mark.parametrize("nu", NUS)
