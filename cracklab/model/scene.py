@@ -12,9 +12,11 @@ from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
 from .record import FIELDS, Record
+from ..solver.schemes import SCHEMES
 from ..solver.stability import beta_max, gamma_limit
 
-FORMULATIONS = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}
+#: {formulation: its convolution rule}, one per time scheme (cracklab.solver.schemes)
+FORMULATIONS = {name: scheme.rule for name, scheme in SCHEMES.items()}
 MAX_FFT_THREADS = 1024
 MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before any work
 MAX_SNAPSHOTS = 10**7

@@ -20,13 +20,11 @@ cancel exactly, so the step stays explicit.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from ..history import make_engine
-from .kernels import Z as Z_kernel
 from .loops import plus_product, product_predict, rotate, shear_correct, shear_predict
+from .schemes import SCHEMES, Channel
 from .spectral import Transforms
 
 
@@ -59,18 +57,6 @@ def split_channels(X: dict, channels, shear3d: bool, c, s, out_arrays=None) -> d
     return out
 
 
-@dataclass
-class _Channel:
-    kernel: str
-    engine: object
-    pre: np.ndarray          # prefactor per mode
-    static: np.ndarray | None = None   # velocity formulation: -(mu q/2) Z(0)
-    v0: np.ndarray | None = None
-    K: np.ndarray | None = None        # product scheme: coefficient of V_n
-    dknown: np.ndarray | None = None   # product scheme: D_{n-1} + dt V_{n-1}/2
-    H: np.ndarray | None = None        # product scheme: F_n without its V_n term
-
-
 class Response:
     """Maps the displacement (and velocity) history on the plane to f_j, Eq. (3)."""
 
@@ -86,29 +72,20 @@ class Response:
             self.c = np.where(q > 0, k / q, 0.0)
             self.s = np.where(q > 0, m / q, 0.0)
         gamma = q * material.cs * dt
-        nu, mu = material.nu, material.mu
+        nu = material.nu
         self.shear3d = (not grid.plane) and any(c in self.components for c in (1, 3))
         self.dt = dt
-        lag = 0 if formulation == "displacement" else 1
-        if formulation != "displacement":
-            rule = "discretized" if formulation == "velocity" else "product"
+        scheme = SCHEMES[formulation]
+        self.scheme = scheme
+        # the displacement formulation takes any rule of its weights; the others have their own
+        rule = rule if formulation == "displacement" else scheme.rule
 
         def channel(kernel):
-            eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule,
-                              formulation="displacement" if formulation == "displacement" else "velocity",
-                              lag=lag, window=window, threads=threads or self.fft.workers, nsteps=nsteps)
-            if formulation == "displacement":
-                return _Channel(kernel, eng, -0.5 * mu * q * gamma)
-            z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
-            ch = _Channel(kernel, eng, 0.5 * mu / material.cs * gamma, static=-0.5 * mu * q * z0)
-            if formulation == "product":
-                from .weights import product_weights
+            eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule, formulation=scheme.convolves,
+                              lag=scheme.lag, window=window, threads=threads or self.fft.workers, nsteps=nsteps)
+            return scheme.channel(kernel, eng, q, gamma, material)
 
-                w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
-                ch.K = ch.pre * (w0 - 0.5 * z0)
-            return ch
-
-        self.channels: dict[str, _Channel] = {name: channel(name)
+        self.channels: dict[str, Channel] = {name: channel(name)
                                               for name in active_channels(grid.plane, self.components)}
         # work arrays reused every step: spectra of the two forward transforms of a step
         # (displacement, velocity), engine outputs, and the f_j handed back (see functional)

@@ -22,17 +22,15 @@ from __future__ import annotations
 
 import math
 
+from .schemes import SCHEMES as _SCHEMES
+
 GROWTH_TOLERANCE = 5e-4
 #: the fraction of the measured limit that a scene may use (covers the bisection's
 #: resolution and the margin between the single-mode and the grid runs)
 SAFETY = 0.97
 
 #: formulation -> the modal scheme (formulation, convolution, integration) it steps with
-SCHEMES = {
-    "displacement": ("displacement", "trapezoid", "explicit"),
-    "velocity": ("velocity", "discretized", "semi-implicit"),
-    "product": ("velocity", "product", "predictor-corrector"),
-}
+SCHEMES = {name: scheme.modal for name, scheme in _SCHEMES.items()}
 
 NU_NODES = (-0.9, -0.825, -0.75, -0.625, -0.5, -0.375, -0.25, -0.125, 0.0, 0.025, 0.05,
             0.075, 0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25, 0.275, 0.3, 0.325, 0.35,

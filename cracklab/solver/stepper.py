@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
-from .loops import add_mean_step, add_scaled, plus_mean, plus_scaled
 from .response import Response
+from .schemes import SCHEMES
 from .spectral import Transforms
 
 # Growth detectors (Stepper._check). Fast: the run stops when max |v| grew by more than
@@ -63,6 +63,7 @@ class Stepper:
         grid, comps = scene.grid, scene.components
         self.comps = comps          # scene.components tests the load fields: once, not every step
         self._area_width = _cell_area_and_width(grid)  # for the crack length of constant-K loading
+        self.scheme = SCHEMES[scene.formulation]
         if response is None:
             response = Response.for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
         self.response = response
@@ -109,68 +110,35 @@ class Stepper:
         return self._run()
 
     def _run(self):
-        """Steps (i)-(v); see :func:`steps`."""
+        """Steps (i)-(v) with the scene's scheme; see :func:`steps`."""
         scene = self.scene
         grid, mat, law = scene.grid, scene.material, scene.law
         comps = self.comps
         dt = scene.dt
-        response = self.response
-        eta = {c: mat.eta(c) for c in comps}
-        velocity = scene.formulation == "velocity"
-        product = scene.formulation == "product"
-        area, width = self._area_width
-        lstate, delta, v, tau = self.lstate, self.delta, self.v, self.tau
+        scheme = self.scheme
+        self.eta = {c: mat.eta(c) for c in comps}
         # the product scheme's trial slips, where the law (or contact) reads the slip
-        trial_slips = product and reads_slip(law, comps)
-        work = {c: np.empty(grid.shape) for c in comps} if trial_slips else None
+        self.trial_slips = scheme.name == "product" and reads_slip(law, comps)
+        self.work = {c: np.empty(grid.shape) for c in comps} if self.trial_slips else None
         for n in range(self.n, scene.nsteps + 1):
-            load, l0 = self.load, self.l0
             t = n * dt
-            law_step = None  # (crack length, strength, load terms) once the law's update of step n is done
-            if product:
-                f = response.predict(v)
-                trial = delta
-                if n > 0 and trial_slips:  # predictor: the law on a copy of its state
-                    # trial slips: delta_{n-1} + dt (v_{n-1} + v_n)/2 with v_n = v_{n-1}
-                    trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps}
-                    pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in lstate.items()}
-                    law.update(pstate, trial, dt, v, t, tau)
-                    # tau* = tau0 + f (the law's solve adds the load; f: the response's work arrays)
-                    terms = load.terms(t, comps, _crack_length(law, pstate, load, area, width, l0))
-                    vp, _ = law.solve(pstate, f, trial, eta, dt, law.strength(pstate, t, grid), terms,
-                                           traction=False)
-                    f = response.correct(vp)
-                    # then with the predicted v_n
-                    trial = {c: plus_mean(delta[c], 0.5 * dt, v[c], vp[c], out=work[c]) for c in comps}
-                elif n > 0:
-                    # the law reads v_{n-1}, t and tau_{n-1}, not the slip: its update is the
-                    # same for the predictor and the step, done once, and so is its strength
-                    law_step = self._update_law(n, t, delta, v, tau)
-                    vp, _ = law.solve(lstate, f, delta, eta, dt, *law_step[1:], traction=False)
-                    f = response.correct(vp)
-            elif velocity:
-                dstar = {c: delta[c] + 0.5 * dt * v[c] for c in comps}
-                f = response.functional(dstar, v)
-                trial = {c: delta[c] + dt * v[c] for c in comps}
-            else:
-                if n > 0:
-                    for c in comps:
-                        add_scaled(delta[c], dt, v[c])
-                f = response.functional(delta)
-                trial = delta
-            length, strength, terms = law_step or self._update_law(n, t, trial, v, tau)
+            f, trial, law_step = scheme.estimate(self, n, t)
+            # law_step: (crack length, strength, load terms) when the scheme did the law's update
+            length, strength, terms = law_step or self.update_law(n, t, trial, self.v, self.tau)
             # tau* = tau0 + f (f: the response's work arrays)
-            v_new, tau = law.solve(lstate, f, trial, eta, dt, strength, terms)
-            if (velocity or product) and n > 0:
-                # semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)
-                for c in comps:
-                    add_mean_step(delta[c], 0.5 * dt, v[c], v_new[c])
-            v = v_new
-            self.v, self.tau, self.n = v, tau, n + 1
-            self._check(n, t, v, self.load.factor(t, length))
-            yield State(n, t, delta, v, tau, np.broadcast_to(strength, grid.shape), lstate)
+            v_new, tau = law.solve(self.lstate, f, trial, self.eta, dt, strength, terms)
+            scheme.finish(self, n, v_new)
+            self.v, self.tau, self.n = v_new, tau, n + 1
+            self._check(n, t, v_new, self.load.factor(t, length))
+            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(strength, grid.shape), self.lstate)
 
-    def _update_law(self, n, t, trial, v, tau):
+    def crack_length(self, state):
+        """Mean crack length of constant-K loading for the law state ``state`` (None when
+        the load does not need it)."""
+        area, width = self._area_width
+        return _crack_length(self.scene.law, state, self.load, area, width, self.l0)
+
+    def update_law(self, n, t, trial, v, tau):
         """Step (i) for the law: its update with the slip ``trial`` (and v, tau of step
         n - 1), the initial crack length of constant-K loading at the first step; returns
         the crack length, the strength and the load terms that step (v) takes."""

@@ -1,0 +1,45 @@
+"""The time-scheme protocol: a scheme is a class holding its coefficients (its rule, the
+kernel its history convolves, its modal recurrence) and the two parts of a step that
+differ between schemes (docs/developer.md, "Add a time scheme"):
+
+* ``channel(kernel, engine, q, gamma, material)``: its part of the response, the
+  prefactors of one channel's functional;
+* ``estimate(run, n, t)``: steps (i)-(iv), the slip update (where the scheme updates it
+  first) and the elastic estimate f_n; returns (f, trial slip, law step or None);
+* ``finish(run, n, v_new)``: the slip update after step (v) (semi-implicit schemes).
+
+The Stepper (solver/stepper.py) runs a scheme; the Response (solver/response.py) asks it
+for its channels and, through ``functional`` or ``predict`` and ``correct``, for f_n.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class Channel:
+    """The prefactors and running terms of one channel's functional."""
+
+    kernel: str
+    engine: object
+    pre: np.ndarray          # prefactor per mode
+    static: np.ndarray | None = None   # velocity formulation: -(mu q/2) Z(0)
+    v0: np.ndarray | None = None
+    K: np.ndarray | None = None        # product scheme: coefficient of V_n
+    dknown: np.ndarray | None = None   # product scheme: D_{n-1} + dt V_{n-1}/2
+    H: np.ndarray | None = None        # product scheme: F_n without its V_n term
+
+
+class Scheme:
+    """Defaults of the protocol (see the module docstring)."""
+
+    name = ""            # Numerics.formulation
+    rule = ""            # convolution rule of its weights
+    convolves = ""       # "displacement" (kernel C against D) or "velocity" (Z against V)
+    lag = 0              # the history starts this many steps back
+    modal = ()           # (formulation, convolution, integration) of cracklab.modal_response
+
+    def finish(self, run, n, v_new):
+        """After step (v): nothing to update by default."""

@@ -1,0 +1,57 @@
+"""The product scheme: the velocity formulation with Z integrated exactly against the
+piecewise-linear velocity history, the trapezoid update (50) and one predictor-corrector
+pass (docs/stability.md): F_n = -(mu q / 2) Z(0) D_n + (mu / 2 c_s) gamma [sum_{m=0}^n W_m
+V_{n-m} + E_0(n) V_0]; the V_n terms form K V_n with K = (mu gamma / 2 c_s)(W_0 - Z(0)/2),
+applied to a predicted, then a corrected velocity. Two FFT pairs per step."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels import Z as Z_kernel
+from ..loops import plus_mean, plus_scaled
+from ..weights import product_weights
+from .base import Channel
+from .velocity import Velocity
+
+
+class Product(Velocity):
+    name = "product"
+    rule = "product"
+    convolves = "velocity"
+    lag = 1
+    modal = ("velocity", "product", "predictor-corrector")
+
+    def channel(self, kernel, engine, q, gamma, material):
+        nu = material.nu
+        z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
+        ch = Channel(kernel, engine, 0.5 * material.mu / material.cs * gamma, static=-0.5 * material.mu * q * z0)
+        w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
+        ch.K = ch.pre * (w0 - 0.5 * z0)
+        return ch
+
+    def estimate(self, run, n, t):
+        """The predictor (velocity held at v_{n-1}; the law on a copy of its state where it
+        reads the slip), then the corrector's f_n with the predicted velocity."""
+        response, law, delta, v, tau = run.response, run.scene.law, run.delta, run.v, run.tau
+        dt, comps, eta = run.scene.dt, run.comps, run.eta
+        f = response.predict(v)
+        if n == 0:
+            return f, delta, None
+        if run.trial_slips:
+            work = run.work
+            # trial slips: delta_{n-1} + dt (v_{n-1} + v_n)/2 with v_n = v_{n-1}
+            trial = {c: plus_scaled(delta[c], dt, v[c], out=work[c]) for c in comps}
+            pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in run.lstate.items()}
+            law.update(pstate, trial, dt, v, t, tau)
+            # tau* = tau0 + f (the law's solve adds the load; f: the response's work arrays)
+            terms = run.load.terms(t, comps, run.crack_length(pstate))
+            vp, _ = law.solve(pstate, f, trial, eta, dt, law.strength(pstate, t, run.scene.grid), terms,
+                              traction=False)
+            f = response.correct(vp)
+            # then with the predicted v_n
+            return f, {c: plus_mean(delta[c], 0.5 * dt, v[c], vp[c], out=work[c]) for c in comps}, None
+        # the law reads v_{n-1}, t and tau_{n-1}, not the slip: its update is the same for
+        # the predictor and the step, done once, and so is its strength
+        law_step = run.update_law(n, t, delta, v, tau)
+        vp, _ = law.solve(run.lstate, f, delta, eta, dt, *law_step[1:], traction=False)
+        return response.correct(vp), delta, law_step
