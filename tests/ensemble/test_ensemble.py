@@ -14,6 +14,7 @@ from click.testing import CliRunner
 import cracklab
 from cracklab import ensemble as E
 from cracklab.cli import main
+from cracklab.ensemble import running
 from cracklab.errors import InputError
 
 
@@ -339,15 +340,15 @@ def test_embedded_cluster_is_sized_to_the_machine(monkeypatch):
     monkeypatch.setattr(distributed, "LocalCluster", FakeCluster)
     monkeypatch.setattr(distributed, "Client", FakeClient)
     monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
-    cores = E._cores()
-    with E._client(n_tasks=100):
+    cores = running.cores()
+    with running.dask_client(n_tasks=100):
         pass
     assert made["n_workers"] == cores and made["threads_per_worker"] == 1 and made["processes"] is True
     assert made["env"]["CRACKLAB_FFT_THREADS"] == "1" and made["env"]["OMP_NUM_THREADS"] == "1"
     assert made["closed"]
-    with E._client(n_tasks=1):
+    with running.dask_client(n_tasks=1):
         pass
     assert made["n_workers"] == 1
-    with E._client(workers=3, n_tasks=100):
+    with running.dask_client(workers=3, n_tasks=100):
         pass
     assert made["n_workers"] == 3

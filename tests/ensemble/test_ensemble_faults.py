@@ -21,6 +21,7 @@ import zarr
 
 import cracklab
 from cracklab import ensemble as E
+from cracklab.ensemble import running
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -389,7 +390,7 @@ def test_full_disk_and_read_only_locations_give_one_clear_error(tmp_path, monkey
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
     with monkeypatch.context() as m:
-        m.setattr(E, "_init_store", full)
+        m.setattr(running, "init_store", full)
         res = runner.invoke(main, ["sweep", str(study), "-o", str(store), "--scheduler", "synchronous"])
     assert res.exit_code == 1 and res.output.strip() == f"Error: store: cannot write {store}: No space left on device"
     assert not (store / E.LOCK_NAME).exists()                 # the lock is released

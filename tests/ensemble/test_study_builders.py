@@ -14,6 +14,7 @@ import cracklab
 from cracklab import ensemble as E
 from cracklab import scenes
 from cracklab.cli import main
+from cracklab.ensemble import builders
 from cracklab.errors import InputError
 
 # names a study file might try: shell and process functions, eval, numpy reached through
@@ -54,11 +55,11 @@ def canary(tmp_path, monkeypatch):
 @pytest.fixture
 def registry():
     """Restore the registrations after the test."""
-    saved = dict(E._REGISTERED)
+    saved = dict(builders.REGISTERED)
     yield
-    E._REGISTERED.clear()
-    E._REGISTERED.update(saved)
-    E._ENTRY_POINT_CACHE.clear()
+    builders.REGISTERED.clear()
+    builders.REGISTERED.update(saved)
+    builders.ENTRY_POINT_CACHE.clear()
 
 
 def _check_refused(err, field, name=None):

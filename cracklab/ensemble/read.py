@@ -1,0 +1,248 @@
+"""Reading an ensemble store: ``member_status``, ``open_member``, ``open_ensemble`` (one
+Dataset with a ``member`` dimension, or a DataTree) and ``member_scene``."""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, StoreError
+from .identity import FORMAT, canonical_json, coordinate_name
+from .store import MEMBERS, check_metadata, error_line, member_attrs, open_group, store_kind, store_str
+
+
+def member_status(store) -> list[dict]:
+    """One dict per member group in the store (plan order): id, status, complete, params,
+    swept, error, traceback, elapsed_s."""
+    store = store_str(store)
+    if store_kind(store) != "ensemble":
+        raise InputError("store", f"{store} is not a cracklab ensemble store (it is a single run)")
+    root = open_group(store, "r")
+    ids = list(root.attrs.get("members", []))
+    local = "://" not in store
+    if local:
+        check_metadata(store, Path(store) / MEMBERS / "zarr.json",
+                        "rerun the sweep (cracklab sweep STUDY.toml -o STORE) to repair it")
+    try:
+        members_group = root[MEMBERS] if MEMBERS in root else None
+        if members_group is None:
+            present = []
+        elif local:         # listed by their directories: one damaged member must not hide the others
+            present = sorted(e.name for e in os.scandir(Path(store) / MEMBERS)
+                             if e.is_dir() and not e.name.startswith(".") and Path(e.path, "zarr.json").exists())
+        else:
+            present = sorted(k for k in members_group.group_keys() if not k.startswith("."))
+    except (ValueError, KeyError, OSError) as exc:
+        raise StoreError(store, f"its members group {store}/{MEMBERS} cannot be read ({exc}); rerun the sweep "
+                                f"(cracklab sweep STUDY.toml -o STORE) to repair it") from None
+    order = [i for i in ids if i in set(present)] + [i for i in present if i not in set(ids)]
+    out = []
+    for mid in order:
+        try:
+            a = dict(members_group[mid].attrs)
+            entry = {"id": mid, "status": a.get("status", "unknown"), "complete": a.get("complete") is True,
+                     "params": json.loads(a.get("member_params", "{}")),
+                     "swept": json.loads(a.get("member_swept", "[]")),
+                     "error": a.get("error"), "traceback": a.get("traceback"),
+                     "elapsed_s": a.get("elapsed_s")}
+        except (ValueError, KeyError, TypeError, OSError) as exc:     # damaged metadata: reported, never read
+            meta = f"{store}/{MEMBERS}/{mid}/zarr.json"
+            entry = {"id": mid, "status": "damaged", "complete": False, "params": {}, "swept": [],
+                     "error": f"damaged: {meta}: {UNREADABLE} ({error_line(exc)})",
+                     "traceback": None, "elapsed_s": None}
+        out.append(entry)
+    return out
+
+
+UNREADABLE = "the member's metadata cannot be read"
+
+
+def _member_damage(store, mid):
+    """None, or a StoreError for the complete member ``mid`` whose metadata or chunk
+    listing is damaged (cheap: no data is read; a changed byte raises when read)."""
+    if "://" in store:
+        return None
+    from ..output.verify import check_member
+
+    report = check_member(store, mid, read=False)
+    if report.ok:
+        return None
+    return StoreError(store, f"member {mid} is damaged: {report.first()}; rerun the sweep (cracklab sweep "
+                             f"STUDY.toml -o STORE): it recomputes damaged members")
+
+
+def open_member(store, member: str):
+    """One member's Dataset, as ``cracklab.simulate`` wrote it (``scene_of`` works on it)."""
+    import xarray as xr
+
+    store = store_str(store)
+    attrs = member_attrs(store, member)
+    if attrs is None and "://" not in store and (Path(store) / MEMBERS / member / "zarr.json").exists():
+        check_metadata(store, Path(store) / MEMBERS / member / "zarr.json",
+                        "rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the member")
+    if attrs is not None and attrs.get("complete") is True:
+        err = _member_damage(store, member)
+        if err is not None:
+            raise err
+    try:
+        return xr.open_zarr(store, group=f"{MEMBERS}/{member}", consolidated=False)
+    except FileNotFoundError:
+        raise InputError("member", f"{member!r} is not a member of {store}") from None
+    except (ValueError, KeyError, OSError) as exc:
+        raise StoreError(store, f"member {member} cannot be read ({error_line(exc)}); cracklab verify {store} "
+                                f"names the damaged files; rerun the sweep to recompute it") from None
+
+
+def _coord_values(values):
+    """A 1-D coordinate array from per-member values (None where a member lacks it)."""
+    present = [v for v in values if v is not None]
+    if present and all(isinstance(v, bool) for v in present) and len(present) == len(values):
+        return np.array(values, dtype=bool)
+    if present and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
+        if all(isinstance(v, int) for v in present) and len(present) == len(values):
+            return np.array(values, dtype=np.int64)
+        return np.array([np.nan if v is None else float(v) for v in values])
+    return np.array(["" if v is None else (v if isinstance(v, str) else json.dumps(v)) for v in values],
+                    dtype=object)
+
+
+def open_ensemble(store, *, members=None, complete_only=True, tree=False):
+    """The ensemble as one lazily loaded xarray Dataset with a ``member`` dimension.
+
+    Coordinates along ``member``: the member ids (``member``), every swept parameter
+    (dots in names become underscores: law.tau_c -> law_tau_c; a member without the
+    parameter has NaN, or "" for strings), ``scene_name`` and ``scene`` (the member's
+    scene as JSON, see ``member_scene``). Members on different grids or snapshot times are
+    aligned by an outer join (the union of the coordinates, NaN where a member has no
+    value). With ``tree=True`` a DataTree /members/<id> is returned instead (no padding).
+    Only complete members are read unless ``complete_only=False``; ``members``: only
+    these ids (e.g. ``[m.id for m in result.members]`` of one sweep). Ready for
+    ``ds.groupby("contrast")`` and ``ds.set_xindex("diameter").sel(diameter=...)``."""
+    import xarray as xr
+
+    store = store_str(store)
+    status = member_status(store)
+    if members is not None:
+        wanted = [getattr(m, "id", m) for m in members]
+        by_id = {s["id"]: s for s in status}
+        missing = [m for m in wanted if m not in by_id]
+        if missing:
+            raise InputError("members", f"not in {store}: {', '.join(missing[:5])}")
+        status = [by_id[m] for m in wanted]
+    unreadable = [s for s in status if s["status"] == "damaged" and UNREADABLE in str(s.get("error"))]
+    if unreadable:
+        raise StoreError(store, f"member {unreadable[0]['id']} is {unreadable[0]['error']}; rerun the sweep "
+                                f"(cracklab sweep STUDY.toml -o STORE): it recomputes damaged members")
+    if complete_only:
+        status = [s for s in status if s["complete"]]
+    if not status:
+        raise InputError("store", f"{store} holds no complete members")
+    root_attrs = dict(open_group(store, "r").attrs)
+    swept = list(dict.fromkeys(k for s in status for k in s["swept"]))
+    if len({s["params"].get("builder") for s in status}) > 1 and "builder" not in swept:
+        swept.append("builder")
+    datasets, scenes, names, kept = [], [], [], []
+    for s in status:
+        try:
+            ds = open_member(store, s["id"])
+        except InputError:
+            if complete_only:           # replaced meanwhile (a sweep swapping it): not complete now
+                continue
+            raise
+        if complete_only and ds.attrs.get("complete") is not True:
+            continue                    # rewritten since it was listed: the group read is not complete
+        kept.append(s)
+        scene_json = ds.attrs.get("scene", "{}")
+        try:
+            name = json.loads(scene_json).get("name", "")
+        except ValueError:
+            name = ""
+        scenes.append(scene_json)
+        names.append(name)
+        ds = _with_input_coords(ds, scene_json)
+        ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("Conventions", "source", "cracklab_version")}
+        datasets.append(ds)
+    status = kept
+    if not status:
+        raise InputError("store", f"{store} holds no complete members")
+    if tree:
+        nodes = {"/": xr.Dataset(attrs=_ensemble_attrs(root_attrs, store))}
+        for s, ds, text in zip(status, datasets, scenes):
+            nodes[f"/{MEMBERS}/{s['id']}"] = ds.assign_attrs(scene=text, member_id=s["id"],
+                                                             member_params=canonical_json(s["params"]))
+        return xr.DataTree.from_dict(nodes)
+    try:
+        ens = xr.concat(datasets, dim="member", join="outer", data_vars="all", coords="different",
+                        compat="equals", combine_attrs="drop_conflicts", fill_value=np.nan)
+    except (ValueError, KeyError) as exc:
+        raise StoreError(store, f"its members cannot be combined ({error_line(exc)}); a member is probably "
+                                f"damaged: cracklab verify {store} names the files, and rerunning the sweep "
+                                f"recomputes damaged members") from None
+    coords = {"member": ("member", np.array([s["id"] for s in status], dtype=object),
+                         {"long_name": "ensemble member id"}),
+              "scene": ("member", np.array(scenes, dtype=object),
+                        {"long_name": "the member's scene as JSON (cracklab.ensemble.member_scene)"}),
+              "scene_name": ("member", np.array(names, dtype=object), {"long_name": "scene name"})}
+    for name in swept:
+        values = [s["params"].get(name) for s in status]
+        coords[coordinate_name(name)] = ("member", _coord_values(values),
+                                         {"long_name": f"swept parameter {name}", "parameter": name})
+    ens = ens.assign_coords(coords)
+    ens.attrs.update(_ensemble_attrs(root_attrs, store))
+    ens.attrs["swept"] = json.dumps(swept)
+    return ens
+
+
+def _with_input_coords(ds, scene_json):
+    """Give the input_x1/input_x3 dims (full-grid scene inputs) their coordinates, so that
+    members on different grids align on them."""
+    dims = [d for d in ("input_x1", "input_x3") if d in ds.dims and d not in ds.coords]
+    if not dims:
+        return ds
+    try:
+        grid = json.loads(scene_json)["grid"]
+    except (ValueError, KeyError, TypeError):
+        return ds
+    coords = {}
+    for d, n, L in (("input_x1", "n1", "L1"), ("input_x3", "n3", "L3")):
+        if d in dims and n in grid and L in grid and int(grid[n]) == ds.sizes[d]:
+            coords[d] = (d, np.arange(int(grid[n])) * float(grid[L]) / int(grid[n]),
+                         {"long_name": f"{d[len('input_'):]} of the scene inputs"})
+    return ds.assign_coords(coords)
+
+
+def _ensemble_attrs(root_attrs, store):
+    return {"title": root_attrs.get("title", "cracklab ensemble"), "cracklab_ensemble": FORMAT,
+            "study": root_attrs.get("study", "{}"), "axes": root_attrs.get("axes", "[]"),
+            "ensemble_store": store}
+
+
+def member_scene(ens, member):
+    """The Scene of one member of an ``open_ensemble`` Dataset (or of any Dataset with a
+    ``scene`` attr or coordinate)."""
+    from ..model.scene_io import scene_from_data
+
+    ds = ens.sel(member=member) if "member" in ens.dims else ens
+    text = ds["scene"].item() if "scene" in ds.coords else ds.attrs["scene"]
+    arrays = {}
+    for n in ds.data_vars:
+        if n.startswith("input_"):
+            a = ds[n]
+            a = a.dropna("input_x1", how="all").dropna("input_x3", how="all") if a.dtype.kind == "f" else a
+            arrays[n] = np.asarray(a.values)
+    data = json.loads(text)
+    wanted = set()
+
+    def refs(d):
+        if isinstance(d, dict):
+            if set(d) == {"array"}:
+                wanted.add(d["array"])
+            for v in d.values():
+                refs(v)
+
+    refs(data)
+    arrays = {k: (v.astype(bool) if k.endswith(("bonded", "initial_crack")) and v.dtype != bool else v)
+              for k, v in arrays.items() if k in wanted}
+    return scene_from_data(data, arrays)
