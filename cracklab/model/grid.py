@@ -112,27 +112,23 @@ class Grid:
             return (self.n1 // 2 + 1, 1)
         return (self.n1, self.n3 // 2 + 1)
 
+    def _axes(self) -> tuple[np.ndarray, np.ndarray]:
+        """The wave numbers k (along x1) and m (along x3) of the spectral layout's axes."""
+        if self.plane:
+            return 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1), np.zeros(1)
+        return (2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1),
+                2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3))
+
     def wavenumbers(self) -> tuple[np.ndarray, np.ndarray]:
         """k (along x1) and m (along x3) on the spectral layout, each of spectral_shape."""
-        if self.plane:
-            k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
-            m = np.zeros(1)
-        else:
-            k = 2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1)
-            m = 2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3)
-        return np.meshgrid(k, m, indexing="ij")
+        return np.meshgrid(*self._axes(), indexing="ij")
 
     def q_max(self) -> float:
         """Largest wave-vector magnitude on the grid: the same number as the maximum of
         sqrt(k^2 + m^2) over ``wavenumbers()``, from the two axes alone (rounding is
         monotone, so the maximum is at the largest k^2 and m^2): O(n1 + n3), not a
         field of n1 n3 values, when a scene is validated."""
-        if self.plane:
-            k = 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1)
-            m = np.zeros(1)
-        else:
-            k = 2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1)
-            m = 2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3)
+        k, m = self._axes()
         return float(np.sqrt((k**2).max() + (m**2).max()))
 
     def nearest_node(self, x1: float, x3: float = 0.0) -> tuple[int, int]:
