@@ -177,7 +177,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
             record_failure(store, m, error, "")
             result.failed[m.id] = error
     result.elapsed = time.perf_counter() - t0
-    open_group(store, "a").attrs.update({"last_run": json.dumps({
+    open_group(store, "a").update_attributes({"last_run": json.dumps({
         "members": len(members), "ran": len(todo), "skipped": len(result.skipped),
         "failed": result.failed, "damaged": result.damaged, "elapsed_s": round(result.elapsed, 3)})})
     return result
@@ -216,17 +216,17 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None) 
         old = member_attrs(store, member.id)
         if old is not None and old.get("complete") is True:
             if "://" in store:      # no rename: mark it incomplete before any array is touched
-                open_group(path, "a").attrs.update({"complete": False, "status": "running"})
+                open_group(path, "a").update_attributes({"complete": False, "status": "running"})
             else:
                 target = f"{store_str(store)}/{MEMBERS}/.{member.id}{SWAP_TAG}{os.urandom(4).hex()}"
         g = open_group(target, "w")          # clears whatever an earlier attempt left
-        g.attrs.update({**meta, "status": "running", "complete": False})
+        g.update_attributes({**meta, "status": "running", "complete": False})
         scene = build_scene(base, member.params, fft_threads=fft_threads, builders=builders)
         simulate(scene, store=target)
         g = open_group(target, "a")
         elapsed = time.perf_counter() - t0
-        g.attrs.update({**meta, "status": "complete", "elapsed_s": round(elapsed, 3)})
-        g.attrs.update({"complete": True})   # last: the member is complete only now
+        g.update_attributes({**meta, "status": "complete", "elapsed_s": round(elapsed, 3)})
+        g.update_attributes({"complete": True})   # last: the member is complete only now
         if target != path:
             swap_in(target, path)
         return {"id": member.id, "status": "complete", "elapsed": elapsed, "worker": worker}

@@ -126,7 +126,7 @@ def init_store(store: str, study_spec: dict, members: list[Member], axes=()):
     root = open_group(store, "a")
     old = list(root.attrs.get("members", []))
     ids = old + [m.id for m in members if m.id not in set(old)]
-    root.attrs.update({
+    root.update_attributes({
         "cracklab_ensemble": FORMAT,
         "title": f"cracklab ensemble: {study_spec.get('name', 'study')}",
         "study": json.dumps(study_spec, sort_keys=True),
@@ -175,7 +175,7 @@ def damage_of(store, member: Member):
         return None
     line = report.first()
     with contextlib.suppress(Exception):
-        open_group(member_path(store, member.id), "a").attrs.update(
+        open_group(member_path(store, member.id), "a").update_attributes(
             {"complete": False, "status": "damaged", "error": f"damaged: {line}"})
     return line
 
@@ -200,7 +200,7 @@ def record_failure(store, member: Member, error: str, tb: str, elapsed: float | 
         g = open_group(path, "a")
     except Exception:  # noqa: BLE001
         return
-    g.attrs.update({"member_id": member.id, "member_params": canonical_json(member.params),
+    g.update_attributes({"member_id": member.id, "member_params": canonical_json(member.params),
                     "member_swept": json.dumps(list(member.swept)), "status": "failed",
                     "error": error, "traceback": tb, "complete": False,
                     **({"elapsed_s": round(elapsed, 3)} if elapsed is not None else {})})

@@ -149,7 +149,7 @@ class _Recorder:
             import zarr
 
             def fresh():
-                zarr.open_group(str(self.path), mode="w").attrs.update(ds.attrs)
+                zarr.open_group(str(self.path), mode="w").update_attributes(ds.attrs)
                 ds.to_zarr(self.store, mode="a", consolidated=False, compute=False, write_empty_chunks=True,
                            encoding=checkpoint.encoding(ds))
 
@@ -196,10 +196,12 @@ class _Recorder:
                  "series": {f: self.series[f][:n + 1] for f in self.station_fields}}
         self._store_op(f"writing the checkpoint after step {n}", checkpoint.write, self.path, state)
         self.checkpoint_step = n
-        try:  # informational: the snapshots up to this step match the checkpoint
+        try:  # informational: the snapshots up to this step match the checkpoint; one
+            # metadata write for both (zarr's attrs.update writes one key at a time, and a
+            # kill between the two left the new step with the previous snapshot count)
             import zarr
 
-            zarr.open_group(str(self.path), mode="a").attrs.update(
+            zarr.open_group(str(self.path), mode="a").update_attributes(
                 {"cracklab_checkpoint_step": n, "cracklab_checkpoint_snapshots": self.nsnap})
         except OSError as exc:
             raise checkpoint.store_error(self.path, exc, f"recording the checkpoint after step {n}") from None
@@ -211,7 +213,7 @@ class _Recorder:
         import zarr
 
         self._store_op("preparing the store to resume",
-                       lambda: zarr.open_group(str(self.path), mode="a").attrs.update({"cracklab_status": "running"}))
+                       lambda: zarr.open_group(str(self.path), mode="a").update_attributes({"cracklab_status": "running"}))
         self._store_op("preparing the store to resume", checkpoint.prepare_resume, self.path, self.snapshot_times())
         self.written = True
         self.nsnap = int(ck["nsnap"])
