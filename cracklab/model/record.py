@@ -38,10 +38,11 @@ class Record:
             raise InputError("record.fields", f"must be a list of field names ({', '.join(FIELDS)}), "
                                               f"got {self.fields!r}")
         object.__setattr__(self, "fields", tuple(self.fields))
+        state = state_fields()
         for f in self.fields:
-            if not isinstance(f, str) or f not in FIELDS + state_fields():
+            if not isinstance(f, str) or (f not in FIELDS and f not in state):
                 raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}, "
-                                                  f"or a state variable of the law ({', '.join(state_fields())})")
+                                                  f"or a state variable of the law ({', '.join(state)})")
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")

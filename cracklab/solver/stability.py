@@ -20,8 +20,7 @@ and is the default whenever a shear component is active.
 """
 from __future__ import annotations
 
-import math
-
+from .kernels import wave_speed_ratio
 from .schemes import SCHEMES as _SCHEMES
 
 GROWTH_TOLERANCE = 5e-4
@@ -84,17 +83,13 @@ LIMITS = {
 }
 
 
-def _a(nu: float) -> float:
-    return math.sqrt(2.0 * (1.0 - nu) / (1.0 - 2.0 * nu))
-
-
 def gamma_max(formulation: str, mode: str, nu: float, *, measured: bool = False) -> float:
     """Largest stable gamma = q c_s dt of a scheme's ``mode`` kernel at Poisson ratio ``nu``
     (SAFETY times the measured limit; the measured one itself with ``measured=True``)."""
     table = LIMITS[formulation][mode]
     nu = float(nu)
     if nu >= NU_NODES[-1]:
-        g = table[-1] * (_a(NU_NODES[-1]) / _a(nu) if mode == "I" else 1.0)
+        g = table[-1] * (wave_speed_ratio(NU_NODES[-1]) / wave_speed_ratio(nu) if mode == "I" else 1.0)
     elif nu <= NU_NODES[0]:
         g = table[0]
     else:

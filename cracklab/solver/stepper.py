@@ -145,14 +145,14 @@ class Stepper:
         scene, law, lstate = self.scene, self.scene.law, self.lstate
         area, width = self._area_width
         law.update(lstate, trial, scene.dt, v if n > 0 else None, t, tau if n > 0 else None)
-        load, l0 = self.load, self.l0
-        if load.constant_K and l0 is None:
-            l0 = self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+        load = self.load
+        if load.constant_K and self.l0 is None:
+            self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
             if load.l0 is None:
                 # Loading.factor scales by sqrt(l0 / l): give it the initial length
-                load = self.load = dataclasses.replace(load, l0=l0)
-        length = _crack_length(law, lstate, load, area, width, l0)
-        return length, law.strength(lstate, t, scene.grid), load.terms(t, self.comps, length)
+                self.load = dataclasses.replace(load, l0=self.l0)
+        length = self.crack_length(lstate)
+        return length, law.strength(lstate, t, scene.grid), self.load.terms(t, self.comps, length)
 
     def _check(self, n, t, v, g):
         """Stop on a non-finite velocity or on exponential growth, fast or slow (module constants)."""

@@ -7,11 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import Z as Z_kernel
 from ..loops import plus_mean, plus_scaled
 from ..weights import product_weights
-from .base import Channel
-from .velocity import Velocity
+from .velocity import Velocity, z_at_zero
 
 
 class Product(Velocity):
@@ -22,11 +20,10 @@ class Product(Velocity):
     modal = ("velocity", "product", "predictor-corrector")
 
     def channel(self, kernel, engine, q, gamma, material):
-        nu = material.nu
-        z0 = float(Z_kernel(kernel, np.zeros(1), nu)[0])
-        ch = Channel(kernel, engine, 0.5 * material.mu / material.cs * gamma, static=-0.5 * material.mu * q * z0)
-        w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
-        ch.K = ch.pre * (w0 - 0.5 * z0)
+        """The velocity formulation's channel, with K, the coefficient of V_n."""
+        ch = super().channel(kernel, engine, q, gamma, material)
+        w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=material.nu, order=1, part="lag")
+        ch.K = ch.pre * (w0 - 0.5 * z_at_zero(kernel, material.nu))
         return ch
 
     def estimate(self, run, n, t):

@@ -11,6 +11,11 @@ from ..loops import add_mean_step
 from .base import Channel, Scheme
 
 
+def z_at_zero(kernel, nu) -> float:
+    """Z(0) = int_0^inf C of a kernel (the static term of the velocity formulation)."""
+    return float(Z_kernel(kernel, np.zeros(1), nu)[0])
+
+
 class Velocity(Scheme):
     name = "velocity"
     rule = "discretized"
@@ -19,9 +24,8 @@ class Velocity(Scheme):
     modal = ("velocity", "discretized", "semi-implicit")
 
     def channel(self, kernel, engine, q, gamma, material):
-        z0 = float(Z_kernel(kernel, np.zeros(1), material.nu)[0])
         return Channel(kernel, engine, 0.5 * material.mu / material.cs * gamma,
-                       static=-0.5 * material.mu * q * z0)
+                       static=-0.5 * material.mu * q * z_at_zero(kernel, material.nu))
 
     def estimate(self, run, n, t):
         """f_n at delta*_n = delta_{n-1} + dt v_{n-1}/2; the law sees delta_{n-1} + dt v_{n-1}."""
