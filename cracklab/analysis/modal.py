@@ -245,7 +245,7 @@ def _z_moments(mode, gamma, ncell, nu):
     return np.stack([z @ _GLU**p for p in range(4)])
 
 
-def _product_tables(mode, gamma, N, nu, order):
+def product_tables(mode, gamma, N, nu, order):
     """Lag weights W_m, start-up corrections E[i, n] (samples r_0, r_1, r_2 at step n) and
     the end corrections of the displacement sum, for product integration of order 1 or 3.
 
@@ -298,7 +298,7 @@ def _run_product(mode, gamma, N, nu, order, integration, passes):
     eta = eta_hat(mode, nu)
     g = gamma / eta
     z0 = _static(mode, nu)
-    W, E, d_new, d_old = _product_tables(mode, gamma, N, nu, order)
+    W, E, d_new, d_old = product_tables(mode, gamma, N, nu, order)
     wr = np.ascontiguousarray(W[::-1])  # wr[N - m] = W_m
     r = np.full(N + 1, np.nan)
     r[0] = 1.0

@@ -64,7 +64,8 @@ _EXPECT = {
 }
 
 
-def _classes():
+def section_classes() -> dict:
+    """{section: dataclass} of the scene's sections other than the law."""
     from .scene import Numerics
 
     return {"material": Material, "grid": Grid, "loading": Loading, "record": Record,
@@ -85,7 +86,8 @@ def _kind(section: str, f: dataclasses.Field) -> tuple[str, bool]:
     return _BASE_KINDS.get(base, "any"), optional
 
 
-def _schema(section: str, cls) -> dict:
+def section_schema(section: str, cls) -> dict:
+    """{field: (kind of value, optional)} of a section's dataclass, from its annotations."""
     return {f.name: _kind(section, f) for f in dataclasses.fields(cls)}
 
 
@@ -367,7 +369,7 @@ def _build(section, cls, d, arrays, schema=None):
         d = {}
     if not isinstance(d, dict):
         raise InputError(section, f"must be a table of parameters, got {d!r}")
-    schema = schema or _schema(section, cls)
+    schema = schema or section_schema(section, cls)
     kwargs = {}
     for key, value in d.items():
         if key not in schema:
@@ -413,7 +415,7 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     for required in ("material", "grid", "t_end"):
         if required not in data:
             raise InputError(required, "is required")
-    classes = _classes()
+    classes = section_classes()
     parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("material", "grid")}
     parts["law"] = _build("law", LAWS[kind], law_data, arrays)
     for s in ("loading", "record", "numerics"):
@@ -513,7 +515,7 @@ def scene_from_dataset(ds):
 def _restore_attr_types(data):
     """Booleans were stored as "true"/"false" and one-element lists may come back as
     scalars from netCDF: restore them where the schema says so (attrs path only)."""
-    classes = _classes()
+    classes = section_classes()
     for section, d in data.items():
         if section not in SECTIONS or not isinstance(d, dict):
             continue
@@ -524,7 +526,7 @@ def _restore_attr_types(data):
                 continue
         else:
             cls = classes[section]
-        schema = _schema(section, cls)
+        schema = section_schema(section, cls)
         for key, value in list(d.items()):
             kind = schema.get(key, ("any", False))[0]
             if kind in ("boolean", "mask") and isinstance(value, str) and value in ("true", "false"):

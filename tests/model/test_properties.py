@@ -24,7 +24,7 @@ import cracklab
 from cracklab import (Grid, InputError, LinearCohesive, Loading, Material, Numerics, PrescribedRupture,
                       Record, Scene, SlipWeakening, TractionFree)
 from cracklab.cli import main
-from cracklab.model.scene_io import _schema, scene_from_dataset, scene_from_toml, scene_to_dataset, scene_to_toml
+from cracklab.model.scene_io import section_schema, scene_from_dataset, scene_from_toml, scene_to_dataset, scene_to_toml
 from cracklab.laws import LAWS
 
 # CRACKLAB_HYPOTHESIS_EXAMPLES=1000 (and CRACKLAB_HYPOTHESIS_RANDOM=1) for a longer, random search
@@ -71,10 +71,10 @@ def count(name):
 
 
 def _schema_of(data, section):
-    from cracklab.model.scene_io import _classes
+    from cracklab.model.scene_io import section_classes
 
-    cls = LAWS[data["law"]["kind"]] if section == "law" else _classes()[section]
-    schema = _schema(section, cls)
+    cls = LAWS[data["law"]["kind"]] if section == "law" else section_classes()[section]
+    schema = section_schema(section, cls)
     if section == "law":
         schema["kind"] = ("string", False)
     return schema

@@ -28,7 +28,7 @@ from cracklab.analysis.modal import (
     modal_response,
     product_weights,
 )
-from cracklab.analysis.modal import _product_tables
+from cracklab.analysis.modal import product_tables
 
 NU = 0.25
 DEFAULT = dict(formulation="displacement", convolution="trapezoid", integration="explicit")
@@ -146,7 +146,7 @@ def test_product_weights_integrate_polynomials_exactly(order):
     velocities of degree <= 1 (order 1) or <= 2 (order 3: cubic cells, quadratic end cells;
     n = 1 is a single linear cell)."""
     gamma, N = 0.7, 12
-    W, E, _, _ = _product_tables("II", gamma, N, NU, order)
+    W, E, _, _ = product_tables("II", gamma, N, NU, order)
     j = np.arange(N + 1)
     np.testing.assert_allclose(W, product_weights("II", gamma, j, nu=NU, order=order, part="lag"), atol=1e-14)
     for i in range(3):
