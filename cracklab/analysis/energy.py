@@ -57,7 +57,7 @@ import xarray as xr
 from ..solver import kernels
 from ..errors import InputError
 from ..model.record import Record
-from ..solver.response import active_channels, split_channels
+from ..solver.halfspace import active_channels, split_channels
 
 __all__ = ["energy_record", "energy_budget", "strain_energy", "static_stiffness", "budget_summary"]
 

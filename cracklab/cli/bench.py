@@ -11,7 +11,7 @@ from ..laws import TractionFree
 from ..model.loading import Loading
 from ..model.material import Material
 from ..model.record import Record
-from ..solver.response import Response
+from ..solver.interfaces import for_scene as interface_for_scene
 from ..model.scene import Numerics, Scene
 from ..solver.spectral import Transforms, backend_name
 from ..solver.stability import beta_max
@@ -75,7 +75,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     history's length alone).
     """
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
-    stepper = Stepper(scene, Response.for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
+    stepper = Stepper(scene, interface_for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
     response = stepper.response
     overlap = any(ch.engine.overlap for ch in response.channels.values())
     pair = _Pair(scene.grid, threads)

@@ -1,4 +1,4 @@
-"""Isotropic linear elastic material of the two half spaces."""
+"""Isotropic linear elastic material of a half space."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,6 +7,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError, check_fields_nesting, check_positive
+from ..solver.kernels import wave_speed_ratio
 
 
 @dataclass(frozen=True)
@@ -38,8 +39,8 @@ class Material:
 
     @property
     def a(self) -> float:
-        """c_d / c_s, with (c_d/c_s)^2 = 2(1-nu)/(1-2nu)."""
-        return float(np.sqrt(2.0 * (1.0 - self.nu) / (1.0 - 2.0 * self.nu)))
+        """c_d / c_s, with (c_d/c_s)^2 = 2(1-nu)/(1-2nu) (cracklab.kernels.wave_speed_ratio)."""
+        return wave_speed_ratio(self.nu)
 
     @property
     def cd(self) -> float:
@@ -57,5 +58,6 @@ class Material:
         return float(rayleigh_speed_ratio(self.nu)) * self.cs
 
     def eta(self, component: int) -> float:
-        """Radiation damping V_jj of Eq. (4): mu/(2 cs) for shear, mu a/(2 cs) for opening."""
+        """Radiation damping V_jj of Eq. (4) of an interface between two half spaces of
+        this material: mu/(2 cs) for shear, mu a/(2 cs) for opening."""
         return self.mu * (self.a if component == 2 else 1.0) / (2.0 * self.cs)

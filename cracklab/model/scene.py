@@ -94,9 +94,15 @@ class Numerics:
         return formulation, FORMULATIONS[formulation]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Scene:
-    material: Material
+    """One simulation: the half spaces' ``material`` (both sides) or ``materials`` =
+    (top, bottom) (top: x2 > 0), the grid, the interface law, the loading, the duration
+    ``t_end``, the time-step factor ``beta`` (dt = beta min(dx1, dx3) / c_s; None: the
+    stable default), what to record and the numerical options. Validated at construction:
+    a bad input raises one InputError naming the field and the accepted range."""
+
+    material: Material | None = None
     grid: Grid
     law: object
     loading: Loading
@@ -106,11 +112,12 @@ class Scene:
     numerics: Numerics = field(default_factory=Numerics)
     units: dict = field(default_factory=lambda: {"length": "1", "time": "1", "stress": "1"})
     name: str = "scene"
+    materials: tuple | None = None
 
     def __post_init__(self):
         check_fields_nesting(self, "")
-        for name, cls in (("material", Material), ("grid", Grid), ("loading", Loading),
-                          ("record", Record), ("numerics", Numerics)):
+        self._check_materials()
+        for name, cls in (("grid", Grid), ("loading", Loading), ("record", Record), ("numerics", Numerics)):
             if not isinstance(getattr(self, name), cls):
                 raise InputError(name, f"must be a cracklab.{cls.__name__}, got {type(getattr(self, name)).__name__}")
         if type(self.law) not in LAWS.values():
@@ -175,6 +182,34 @@ class Scene:
             if int(f[-1]) not in active:
                 raise InputError("record.fields", f"{f!r} is not computed: active components are {active}")
 
+    def _check_materials(self):
+        """One material for both sides, or (top, bottom): stored as ``materials`` = (top,
+        bottom) always, and ``material`` = the one material when the two are the same."""
+        material, materials = self.material, self.materials
+        if material is not None and not isinstance(material, Material):
+            raise InputError("material", f"must be a cracklab.Material, got {type(material).__name__}")
+        if materials is None:
+            if material is None:
+                raise InputError("material", "is required (or materials = (top, bottom))")
+            materials = (material, material)
+        else:
+            if not isinstance(materials, (tuple, list)) or len(materials) != 2:
+                raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
+            for side, m in zip(("top", "bottom"), materials):
+                if not isinstance(m, Material):
+                    raise InputError(f"materials.{side}", f"must be a cracklab.Material, got {type(m).__name__}")
+            materials = tuple(materials)
+            if material is not None and materials != (material, material):
+                raise InputError("material", "give material (both sides) or materials (top, bottom), not both "
+                                             "with different values")
+        top, bottom = materials
+        if top != bottom:
+            raise InputError("materials", f"different materials on the two sides (top {top}, bottom {bottom}) "
+                                          f"need the bimaterial interface response, which is not implemented; "
+                                          f"give one material for both sides")
+        object.__setattr__(self, "materials", materials)
+        object.__setattr__(self, "material", top)
+
     def _check_shapes(self):
         shape = self.grid.shape
 
@@ -228,6 +263,12 @@ class Scene:
         return tuple(sorted(active))
 
     def replace(self, **changes) -> "Scene":
+        """A new scene with ``changes``, validated like any other (a new ``material``
+        replaces both sides; new ``materials`` replace the one material)."""
+        if "material" in changes and "materials" not in changes:
+            changes["materials"] = None
+        elif "materials" in changes and "material" not in changes:
+            changes["material"] = None
         return dataclasses.replace(self, **changes)
 
     # thin wrappers over cracklab.model.scene_io (lossless round trips, see docs/scenes.md)

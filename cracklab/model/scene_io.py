@@ -401,7 +401,7 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     if not isinstance(data, dict):
         raise InputError("scene", f"must be a table, got {type(data).__name__}")
     check_nesting(data)
-    allowed = set(SECTIONS) | set(TOP)
+    allowed = set(SECTIONS) | set(TOP) | {"materials"}
     for key in data:
         if key not in allowed:
             raise InputError(key, f"unknown key; accepted: {', '.join(sorted(allowed))}")
@@ -413,10 +413,13 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     if not isinstance(kind, str) or kind not in LAWS:
         raise InputError("law.kind", f"must be one of {', '.join(sorted(LAWS))}, got {kind!r}")
     for required in ("material", "grid", "t_end"):
-        if required not in data:
-            raise InputError(required, "is required")
+        if required not in data and not (required == "material" and "materials" in data):
+            raise InputError(required, "is required (or, for the material, the tables materials.top and "
+                                       "materials.bottom)" if required == "material" else "is required")
     classes = section_classes()
-    parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("material", "grid")}
+    parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("grid",) + (("material",) * ("material" in data))}
+    if "materials" in data:
+        parts["materials"] = _materials(data["materials"], arrays)
     parts["law"] = _build("law", LAWS[kind], law_data, arrays)
     for s in ("loading", "record", "numerics"):
         parts[s] = _build(s, classes[s], data.get(s), arrays)
@@ -428,6 +431,23 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     if "units" in data:
         top["units"] = _units(data["units"])
     return Scene(**parts, **top)
+
+
+def _materials(d, arrays) -> tuple:
+    """(top, bottom) of a ``[materials.top]`` / ``[materials.bottom]`` pair of tables."""
+    if not isinstance(d, dict) or set(d) != {"top", "bottom"}:
+        got = sorted(d) if isinstance(d, dict) else repr(d)
+        raise InputError("materials", f"must be the two tables materials.top (x2 > 0) and materials.bottom "
+                                      f"(x2 < 0), each with mu, cs and nu, got {got}")
+    out = []
+    for side in ("top", "bottom"):
+        name = f"materials.{side}"
+        try:
+            out.append(_build(name, Material, d[side], arrays, schema=section_schema("material", Material)))
+        except InputError as exc:  # Material names its fields material.<key>
+            field = exc.field.replace("material", name, 1) if exc.field.startswith("material") else exc.field
+            raise InputError(field, str(exc).split(": ", 1)[1]) from None
+    return tuple(out)
 
 
 def _units(units) -> dict:

@@ -1,7 +1,7 @@
 """Checkpoints of long runs and the checks on a run's Zarr store.
 
 A checkpoint is one ``.npz`` file, ``<store>/_checkpoint/state.npz``, holding the full
-solver state after some step n (stepper locals, the Response and its history engines,
+solver state after some step n (stepper locals, the interface, its half spaces and their history engines,
 the recorder's station series and rupture times) and the number of snapshots the store
 held when it was written. It is written to a temporary file in the same directory,
 flushed to disk and moved over the previous one with ``os.replace``: a kill leaves

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
-from .response import Response
+from .interfaces import for_scene as interface_for_scene
 from .schemes import SCHEMES
 from .spectral import Transforms
 
@@ -55,7 +55,8 @@ class Stepper:
 
     ``start``: a dict from :meth:`get_state` (taken after some step m); the iteration
     then continues with step m + 1 and gives the same States as an uninterrupted run.
-    ``response``: a Response to use (built for this scene); its state is restored too.
+    ``response``: the interface to use (solver/interfaces, built for this scene); its state
+    is restored too.
     """
 
     def __init__(self, scene, response=None, start=None):
@@ -65,7 +66,7 @@ class Stepper:
         self._area_width = _cell_area_and_width(grid)  # for the crack length of constant-K loading
         self.scheme = SCHEMES[scene.formulation]
         if response is None:
-            response = Response.for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
+            response = interface_for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
         self.response = response
         self.load = scene.loading
         self.n = 0                  # the next step to take
@@ -112,11 +113,11 @@ class Stepper:
     def _run(self):
         """Steps (i)-(v) with the scene's scheme; see :func:`steps`."""
         scene = self.scene
-        grid, mat, law = scene.grid, scene.material, scene.law
+        grid, law = scene.grid, scene.law
         comps = self.comps
         dt = scene.dt
         scheme = self.scheme
-        self.eta = {c: mat.eta(c) for c in comps}
+        self.eta = self.response.eta
         # the product scheme's trial slips, where the law (or contact) reads the slip
         self.trial_slips = scheme.name == "product" and reads_slip(law, comps)
         self.work = {c: np.empty(grid.shape) for c in comps} if self.trial_slips else None

@@ -16,7 +16,7 @@ Error = root mean square of (numerical - exact) over the remaining samples, divi
 static value 3 P / (4 pi mu r) ("lamb_rms"); the maximum is reported too ("lamb_max").
 
 Modal (one Fourier mode, unit step load, traction-free, nu = 1/4): the recurrences of the
-three grid schemes (cracklab.solver.response / cracklab.solver.stepper with q = mu = c_s = 1) are stepped
+three grid schemes (cracklab.solver.halfspace / cracklab.solver.stepper with q = mu = c_s = 1) are stepped
 through the history engines themselves, so that truncation and the exponential engine can
 be compared (cracklab.analysis.modal.modal_response has no engine option; the untruncated direct
 runs reproduce it to round-off, checked by ``--check``).  Error = max |r - r_exact| over
@@ -246,7 +246,7 @@ def modal_run(mode, gamma, formulation, engine, T_end):
     g = np.array([gamma])
     rule = {"displacement": "trapezoid", "velocity": "discretized", "product": "product"}[formulation]
     form = "displacement" if formulation == "displacement" else "velocity"
-    extra = {"nsteps": N + 1} if eng_name == "exponential" else {}  # as Response.for_scene does
+    extra = {"nsteps": N + 1} if eng_name == "exponential" else {}  # as cracklab.solver.interfaces.for_scene does
     eng = make_engine(eng_name, kernel=mode, gamma=g, nu=NU, rule=rule, formulation=form,
                       lag=0 if formulation == "displacement" else 1, window=window, **extra)
     v = np.empty(N + 1)

@@ -27,7 +27,7 @@ import pytest
 import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionFree, simulate
 from cracklab.analysis.modal import modal_response
-from cracklab.solver.response import Response
+from cracklab.solver.interfaces import interface
 from cracklab.solver.stability import beta_max
 from cracklab.solver.weights import convolution_weights
 
@@ -187,7 +187,7 @@ def test_mode_I_scene_activates_component_2_only():
     shape, _, _ = wave(GRID3, 3, 2)
     sc = scene(GRID3, Loading(tau0_2=shape), 0.1, fields=("v_2",))
     assert sc.components == (2,)
-    resp = Response(MAT, GRID3, sc.dt, sc.components)
+    resp = interface(MAT, GRID3, sc.dt, sc.components)
     assert list(resp.channels) == ["I"]
     res = simulate(sc)
     assert {"v_2"} <= set(res.data_vars)
@@ -196,9 +196,9 @@ def test_mode_I_scene_activates_component_2_only():
     with pytest.raises(cracklab.InputError, match="record.fields"):
         scene(GRID3, Loading(tau0_2=shape), 0.1, fields=("v_1",))
     # 3D shear needs both rotated channels, the plane problem only the one loaded
-    assert sorted(Response(MAT, GRID3, sc.dt, (1, 3)).channels) == ["II", "III"]
-    assert list(Response(MAT, PLANE, sc.dt, (3,)).channels) == ["III"]
-    assert list(Response(MAT, PLANE, sc.dt, (1,)).channels) == ["II"]
+    assert sorted(interface(MAT, GRID3, sc.dt, (1, 3)).channels) == ["II", "III"]
+    assert list(interface(MAT, PLANE, sc.dt, (3,)).channels) == ["III"]
+    assert list(interface(MAT, PLANE, sc.dt, (1,)).channels) == ["II"]
 
 
 # ------------------------------------------------------------------------------ history window

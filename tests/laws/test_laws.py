@@ -13,7 +13,7 @@ import pytest
 from cracklab import (Grid, LinearCohesive, Loading, Material, Numerics, PrescribedRupture, Record,
                       Scene, SlipWeakening, TractionFree, simulate)
 from cracklab.laws import solve_velocity
-from cracklab.solver.response import Response
+from cracklab.solver.interfaces import for_scene as interface_for_scene
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
 ETA = {c: MAT.eta(c) for c in (1, 2, 3)}
@@ -347,7 +347,7 @@ def test_constant_K_scales_the_load_with_crack_length():
     sc, crack = cohesive_scene(constant_K=True, t_end=0.1, fields=("delta_2", "v_2", "tau_2"), tau0=0.6)
     res = simulate(sc)
     g = sc.grid
-    resp = Response.for_scene(sc)   # the same scheme and history engine as the run
+    resp = interface_for_scene(sc)   # the same scheme and history engine as the run
     dmax = np.where(crack, np.inf, 0.0)
     l0 = crack.sum() * g.dx1
     factors, expected = [], []

@@ -504,7 +504,9 @@ def test_cli_sweep_of_a_bad_study_touches_no_store(existing, case, to_existing):
 
 
 def test_report_inputs_tried():
-    """Runs last in this file: how many inputs each property tried (printed with -s)."""
+    """Runs last in this file: how many inputs each property tried (printed with -s).
+    Under pytest-xdist this process may have run only some of the properties: each one
+    that ran here must have tried at least 25 inputs (the smallest max_examples)."""
     total = sum(TRIED.values())
     print(f"\nhypothesis inputs tried: {total} " + ", ".join(f"{k}: {v}" for k, v in sorted(TRIED.items())))
-    assert total == 0 or total >= 300
+    assert all(n >= 25 for n in TRIED.values()), TRIED

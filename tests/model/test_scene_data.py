@@ -338,7 +338,7 @@ def test_engine_threads_reach_the_engine_and_round_trip():
     (None: as fft_threads), survives the TOML round trip, and does not change the result."""
     import cracklab
     from cracklab.model.scene_io import scene_from_toml, scene_to_toml
-    from cracklab.solver.response import Response
+    from cracklab.solver.interfaces import for_scene as interface_for_scene
 
     base = SCENES["traction-free"]()
     sc = base.replace(numerics=Numerics(engine="exponential", fft_threads=1, engine_threads=2))
@@ -346,7 +346,7 @@ def test_engine_threads_reach_the_engine_and_round_trip():
     back = scene_from_toml(scene_to_toml(sc))
     assert back.numerics.engine_threads == 2 and back.numerics.fft_threads == 1
     assert scene_from_toml(scene_to_toml(base)).numerics.engine_threads is None
-    resp = Response.for_scene(sc)
+    resp = interface_for_scene(sc)
     assert {ch.engine.threads for ch in resp.channels.values()} == {2} and resp.fft.workers == 1
     short = dict(t_end=5 * sc.dt)
     a = cracklab.simulate(sc.replace(**short))

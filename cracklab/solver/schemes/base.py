@@ -2,13 +2,15 @@
 kernel its history convolves, its modal recurrence) and the two parts of a step that
 differ between schemes (docs/developer.md, "Add a time scheme"):
 
-* ``channel(kernel, engine, q, gamma, material)``: its part of the response, the
-  prefactors of one channel's functional;
+* ``channel(kernel, engine, q, gamma, mu, cs, nu)``: its part of the response, the
+  prefactors of one channel's functional for a half space of modulus ``mu`` (already
+  scaled: mu/2 for the discontinuity of an identical pair), shear wave speed ``cs``
+  and Poisson ratio ``nu``;
 * ``estimate(run, n, t)``: steps (i)-(iv), the slip update (where the scheme updates it
   first) and the elastic estimate f_n; returns (f, trial slip, law step or None);
 * ``finish(run, n, v_new)``: the slip update after step (v) (semi-implicit schemes).
 
-The Stepper (solver/stepper.py) runs a scheme; the Response (solver/response.py) asks it
+The Stepper (solver/stepper.py) runs a scheme; a HalfSpace (solver/halfspace.py) asks it
 for its channels and, through ``functional`` or ``predict`` and ``correct``, for f_n.
 """
 from __future__ import annotations
@@ -25,7 +27,7 @@ class Channel:
     kernel: str
     engine: object
     pre: np.ndarray          # prefactor per mode
-    static: np.ndarray | None = None   # velocity formulation: -(mu q/2) Z(0)
+    static: np.ndarray | None = None   # velocity formulation: -(mu q/2) Z(0) (pair)
     v0: np.ndarray | None = None
     K: np.ndarray | None = None        # product scheme: coefficient of V_n
     dknown: np.ndarray | None = None   # product scheme: D_{n-1} + dt V_{n-1}/2

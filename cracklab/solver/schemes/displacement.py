@@ -13,8 +13,8 @@ class Displacement(Scheme):
     lag = 0
     modal = ("displacement", "trapezoid", "explicit")
 
-    def channel(self, kernel, engine, q, gamma, material):
-        return Channel(kernel, engine, -0.5 * material.mu * q * gamma)
+    def channel(self, kernel, engine, q, gamma, mu, cs, nu):
+        return Channel(kernel, engine, -mu * q * gamma)
 
     def estimate(self, run, n, t):
         """delta_n = delta_{n-1} + dt v_{n-1} (37), then f_n of delta_n."""

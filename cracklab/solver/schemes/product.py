@@ -19,11 +19,11 @@ class Product(Velocity):
     lag = 1
     modal = ("velocity", "product", "predictor-corrector")
 
-    def channel(self, kernel, engine, q, gamma, material):
+    def channel(self, kernel, engine, q, gamma, mu, cs, nu):
         """The velocity formulation's channel, with K, the coefficient of V_n."""
-        ch = super().channel(kernel, engine, q, gamma, material)
-        w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=material.nu, order=1, part="lag")
-        ch.K = ch.pre * (w0 - 0.5 * z_at_zero(kernel, material.nu))
+        ch = super().channel(kernel, engine, q, gamma, mu, cs, nu)
+        w0 = product_weights(kernel, gamma, np.zeros(gamma.shape, dtype=int), nu=nu, order=1, part="lag")
+        ch.K = ch.pre * (w0 - 0.5 * z_at_zero(kernel, nu))
         return ch
 
     def estimate(self, run, n, t):

@@ -23,9 +23,8 @@ class Velocity(Scheme):
     lag = 1
     modal = ("velocity", "discretized", "semi-implicit")
 
-    def channel(self, kernel, engine, q, gamma, material):
-        return Channel(kernel, engine, 0.5 * material.mu / material.cs * gamma,
-                       static=-0.5 * material.mu * q * z_at_zero(kernel, material.nu))
+    def channel(self, kernel, engine, q, gamma, mu, cs, nu):
+        return Channel(kernel, engine, mu / cs * gamma, static=-mu * q * z_at_zero(kernel, nu))
 
     def estimate(self, run, n, t):
         """f_n at delta*_n = delta_{n-1} + dt v_{n-1}/2; the law sees delta_{n-1} + dt v_{n-1}."""

@@ -1,9 +1,17 @@
-"""Elastodynamic response of the half spaces: the functionals f_j of Eq. (3).
+"""One elastic half space: its material, the channels of its face (kernels and history
+engines) and the face's traction response, the functionals f_j of Eq. (3).
+
+A half space answers the history of the field it is given with f_j scaled by ``scale``:
+1 for its own face displacement; 1/2 for the displacement discontinuity of two
+identical half spaces (they move antisymmetrically, u+ = -u- = delta/2), which is how
+the paper's combined formulation, Eqs. (32)-(33), arises (solver/interfaces/identical.py).
 
 Mode I (component 2) uses kernel C_I, Eq. (32). Shear (components 1, 3) is rotated
 into the longitudinal part (kernel C_II) and the transverse part (kernel C_III) of
 each mode, Eqs. (27)-(28) and (34): two scalar convolutions per mode, not four.
 In the plane problem (n3 == 1) component 1 is mode II and component 3 is mode III.
+The functionals below are written for the identical pair (scale 1/2, the paper's
+form); with scale s, mu/2 reads s mu throughout.
 
 Product scheme (velocity formulation, Z integrated exactly against the piecewise-linear
 velocity history, docs/stability.md):
@@ -57,11 +65,19 @@ def split_channels(X: dict, channels, shear3d: bool, c, s, out_arrays=None) -> d
     return out
 
 
-class Response:
-    """Maps the displacement (and velocity) history on the plane to f_j, Eq. (3)."""
+class HalfSpace:
+    """Maps the displacement (and velocity) history of its face to f_j, Eq. (3), times ``scale``.
 
-    def __init__(self, material, grid, dt, components, *, formulation="displacement",
+    ``material``: its material; ``formulation``: the time scheme (solver/schemes);
+    ``rule``: the displacement scheme's convolution rule (the others have their own);
+    ``engine``, ``window``, ``nsteps``, ``threads``: its history engines
+    (cracklab.history.make_engine); ``transforms``: the FFTs it shares.
+    """
+
+    def __init__(self, material, grid, dt, components, *, scale=1.0, formulation="displacement",
                  rule="trapezoid", engine="direct", window=None, transforms=None, nsteps=None, threads=None):
+        self.material = material
+        self.scale = scale
         self.components = tuple(sorted(components))
         self.formulation = formulation
         self.fft = transforms or Transforms(grid)
@@ -83,7 +99,7 @@ class Response:
         def channel(kernel):
             eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule, formulation=scheme.convolves,
                               lag=scheme.lag, window=window, threads=threads or self.fft.workers, nsteps=nsteps)
-            return scheme.channel(kernel, eng, q, gamma, material)
+            return scheme.channel(kernel, eng, q, gamma, scale * material.mu, material.cs, nu)
 
         self.channels: dict[str, Channel] = {name: channel(name)
                                               for name in active_channels(grid.plane, self.components)}
@@ -99,14 +115,6 @@ class Response:
         self._pre_n = {name: ch.pre * fft.norm for name, ch in self.channels.items()}
         self.n = 0
 
-    @classmethod
-    def for_scene(cls, scene, transforms=None, nsteps=None):
-        """The response a run of ``scene`` uses (its scheme, engine, window and length;
-        ``nsteps``: the length the kernels' fits must cover instead, if longer)."""
-        return cls(scene.material, scene.grid, scene.dt, scene.components, formulation=scene.formulation,
-                   engine=scene.numerics.engine, window=scene.numerics.window, transforms=transforms,
-                   nsteps=max(scene.nsteps, nsteps or 0), threads=scene.numerics.history_threads)
-
     # -- state (checkpoints) -----------------------------------------------------------
     def get_state(self) -> dict:
         """The dynamic state: step count, per-channel start-up and product-scheme terms, engines."""
@@ -119,7 +127,7 @@ class Response:
         return out
 
     def set_state(self, state: dict) -> None:
-        """Restore a state from :meth:`get_state` (a Response built for the same scene)."""
+        """Restore a state from :meth:`get_state` (a HalfSpace built for the same scene)."""
         self.n = int(state["n"])
         for name, ch in self.channels.items():
             cs = state["channels"][name]
@@ -135,7 +143,7 @@ class Response:
 
     def wait(self) -> None:
         """Let every channel's engine finish the work its last push started (no thread of
-        the response runs after this until the next step)."""
+        the half space runs after this until the next step)."""
         for ch in self.channels.values():
             ch.engine.wait()
 
@@ -160,7 +168,7 @@ class Response:
         return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components}, slot)
 
     def _inverse(self, F: dict, prescaled: bool = False) -> dict:
-        """f_j of the channel spectra F (destroyed), in the work arrays of the response
+        """f_j of the channel spectra F (destroyed), in the work arrays of the half space
         (``prescaled``: F carries the 1/N of the inverse transform; else it is applied to
         the component spectra, as the fused passes of the product scheme do)."""
         F = self._join(F)
@@ -171,7 +179,7 @@ class Response:
 
     def _to_real(self, F: dict) -> dict:
         """f_j of the component spectra F (destroyed; they carry the 1/N of the inverse
-        transform), in the work arrays of the response."""
+        transform), in the work arrays of the half space."""
         return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True, prescaled=True) for c, Fc in F.items()}
 
     # -- public -----------------------------------------------------------------------
@@ -240,7 +248,7 @@ class Response:
         Displacement formulation: ``delta`` is delta_n. Velocity formulation: ``delta``
         is delta*_n = delta_{n-1} + dt v_{n-1}/2 and ``v_prev`` is v_{n-1}.
         The arrays returned (here and by predict and correct) are work arrays of the
-        response: valid until its next call.
+        half space: valid until its next call.
         """
         n = self.n
         D = self._forward(delta)

@@ -1,0 +1,44 @@
+"""Two half spaces of one material. Under any load on the plane they move
+antisymmetrically, u+ = -u- = delta/2, so the pair answers delta as one half space
+answers delta/2: one computation, with mu/2 in the prefactors (the combined form of
+Eqs. 32-33) and eta = V_jj of Eq. (4), mu/(2 c_s) in shear and mu c_d/(2 c_s^2) in opening.
+"""
+from __future__ import annotations
+
+from ..halfspace import HalfSpace
+from .base import Interface
+
+
+class Identical(Interface):
+    """The interface between two half spaces of ``material`` (options: HalfSpace's)."""
+
+    def __init__(self, material, grid, dt, components, **options):
+        self.material = material
+        self.half = HalfSpace(material, grid, dt, components, scale=0.5, **options)
+        self.components = self.half.components
+        self.channels = self.half.channels
+        self.fft = self.half.fft
+        self.eta = {c: material.eta(c) for c in self.components}
+
+    @property
+    def n(self) -> int:
+        """Steps pushed so far."""
+        return self.half.n
+
+    def functional(self, delta, v_prev=None):
+        return self.half.functional(delta, v_prev)
+
+    def predict(self, v_prev):
+        return self.half.predict(v_prev)
+
+    def correct(self, v_pred):
+        return self.half.correct(v_pred)
+
+    def wait(self):
+        self.half.wait()
+
+    def get_state(self) -> dict:
+        return self.half.get_state()
+
+    def set_state(self, state: dict) -> None:
+        self.half.set_state(state)
