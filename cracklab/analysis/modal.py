@@ -121,9 +121,10 @@ MAX_STEPS = 200_000
 PRODUCT_CONVOLUTIONS = ("product", "product-cubic")
 _ALL_CONVOLUTIONS = CONVOLUTIONS + ("exact",) + PRODUCT_CONVOLUTIONS
 _ALL_INTEGRATIONS = INTEGRATIONS + ("predictor-corrector",)
-#: the scheme recommended for the full grid (docs/stability.md): velocity formulation,
-#: product integration of Z against the piecewise-linear velocity, and one
-#: predictor-corrector pass of the semi-implicit update (50)
+#: the most accurate scheme of the single-mode study that does not grow (docs/stability.md):
+#: velocity formulation, product integration of Z against the piecewise-cubic velocity, and
+#: one predictor-corrector pass of the semi-implicit update (50); the grid's "product"
+#: formulation is its piecewise-linear variant ("velocity", "product", "predictor-corrector")
 STABLE_SCHEME = ("velocity", "product-cubic", "predictor-corrector")
 
 
@@ -464,10 +465,10 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
         by the other integrations.  Two passes are less stable than one (mode II
         grows from gamma ~ 2; docs/stability.md).
 
-    The scheme recommended for the grid is :data:`STABLE_SCHEME`
-    (velocity, product, predictor-corrector, one pass): second order, and its
-    single-mode response does not grow for modes I, II, III up to gamma = 2.5
-    (docs/stability.md).
+    The grid's product scheme is (velocity, product, predictor-corrector, one pass):
+    second order, and its single-mode response does not grow for modes I, II, III up
+    to gamma = 2.5. :data:`STABLE_SCHEME` is its piecewise-cubic variant (fourth order,
+    up to gamma = 2.6), which runs here only (docs/stability.md).
 
     Returns
     -------

@@ -214,7 +214,7 @@ def write_page(rows, path):
 LAMB_TEXT = """\
 - **The front is the exponential engine**: the paper's displacement scheme at beta = 0.5 at every grid
   size (and at beta = 0.25 for n = 32, the cheapest run), and the product scheme at n = 256, where it is
-  the most accurate run (0.0029 against 0.0037, for 3.6 times the CPU; at n = 64 its 0.025 now costs
+  the most accurate run (0.0029 against 0.0037, for 3.6 times the CPU; at n = 64 its 0.025 costs
   more than the displacement scheme's 0.010 at n = 128). Refining the grid is what buys accuracy: displacement scheme, beta = 0.5,
   rms error 0.085, 0.044, 0.010, 0.0037 of the static value for n = 32, 64, 128, 256.
 - **Smaller beta is not more accurate here**: at beta = 0.25 the error is larger (displacement: 0.067
@@ -276,7 +276,6 @@ CAVEATS = """\
   the exponential engine (which has the product rule) it is on the Lamb front at n = 256.
 - The windowed direct engine allocates its whole window up front; a ring buffer of min(window, steps)
   slots would make truncation as cheap as it should be (it would still be inaccurate, see above).
-- These numbers: the engines as of commit 5fab240 (a later session's rerun; the errors are the same
-  to the digits shown, the CPU times moved left). Re-run the study to update; the prose above quotes
+- These numbers: the engines as of commit 5fab240. Re-run the study to update; the prose above quotes
   the tables and is checked by hand.
 """

@@ -338,11 +338,7 @@ The same two 3D runs at half the resolution (256 x 128, dx = Z/128, the opening 
 | grid check, asperities / uniform | 256 x 128 | {runs.get('asperity_256x128', {}).get('nsteps')} | {_f(runs.get('asperity_256x128', {}).get('elapsed_s'), 0)} / {_f(runs.get('uniform_256x128', {}).get('elapsed_s'), 0)} s |
 
 Exponential history engine, `nice -n 10`, on 2 cores shared with up to 20 other
-processes (load average 15 to 20 during these runs). The estimate before launching
-was 28 ms per step at 512 x 256, timed over 50 steps while the machine was quieter:
-about {_f(0.028 * runs['asperity']['nsteps'], 0)} s per 3D run plus recording. Under the
-load the runs took {_f(runs['asperity']['elapsed_s'] / (0.028 * runs['asperity']['nsteps']), 1)} and
-{_f(runs['uniform']['elapsed_s'] / (0.028 * runs['uniform']['nsteps']), 1)} times that. The paper reports about
+processes (load average 15 to 20 during these runs). The paper reports about
 30 min for 512 x 512 and 1000 steps on a 512-node CM-5.
 
 ## Outputs

@@ -350,8 +350,8 @@ def write_doc(numbers):
     add("")
     add("## Runs (reduced sizes)")
     add("")
-    add("Every step of delta and tau on the whole plane is stored, and two cores are shared by seven "
-        "sessions, so the runs are smaller than the paper's:")
+    add("Every step of delta and tau on the whole plane is stored, and the two cores are shared with "
+        "other jobs, so the runs are smaller than the paper's:")
     add("")
     add("| scene | size | steps | formulation / engine | run time (s) | budget time (s) |")
     add("| --- | --- | --- | --- | --- | --- |")

@@ -372,10 +372,8 @@ units of tau0 X / mu, as in the paper.
 Run time: {sec['simulate']:.0f} s simulation ({s['steps']} steps, {1e3 * sec['simulate'] / s['steps']:.0f} ms
 per step including the recording of {2 * (128 + 8) + 1 + 2 * (64 + 8)} stations), {sec['analysis']:.0f} s analysis
 (including the static solve), {sec['engine_check']:.0f} s for the 128 x 128 check with both engines,
-{sec['figures']:.0f} s figures ({s['machine']}). Estimated beforehand with
-`cracklab bench --n1 512 --n3 512 --mode I --engine exponential`: 59 ms per step, about
-{0.059 * s['steps']:.0f} s; the measured time is longer because the 2 cores were shared with other
-jobs (load average 12 to 19 during the run). Store:
+{sec['figures']:.0f} s figures ({s['machine']}), with the 2 cores shared with
+other jobs (load average 12 to 19 during the run). Store:
 `{s['store']}` (opening field after {', '.join(str(k) for k in FIELD_STEPS)} steps, the
 opening history on both axes, and `static_periodic_delta_2`).
 

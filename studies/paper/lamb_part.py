@@ -365,10 +365,8 @@ printed formula is garbled and its static value is wrong): opening
 2 P G(tau) / (pi mu r), tau = c_s t / r, static value 3 P / (4 pi mu r).
 
 Run time: {sec['simulate']:.0f} s for the simulation, {sec['analysis']:.0f} s analysis,
-{sec['figures']:.0f} s figures ({s['machine']}). Estimated beforehand with
-`cracklab bench --n1 512 --n3 512 --mode I --engine exponential`: 59 ms per step, about
-{0.059 * s['steps']:.0f} s; the measured time is longer because the 2 cores were shared with other
-jobs (load average 12 to 19 during the run). Store: `{s['store']}` (opening field after
+{sec['figures']:.0f} s figures ({s['machine']}), with the 2 cores shared with
+other jobs (load average 12 to 19 during the run). Store: `{s['store']}` (opening field after
 {', '.join(str(k) for k in FIELD_STEPS)} steps, station series, and `pekeris_delta_2`, the exact
 series at every station).
 

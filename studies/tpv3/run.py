@@ -490,7 +490,7 @@ def write_page(res, dxs, page, figrel, notes_path=None, command=None):
                   if short else "")
     text = f"""# SCEC TPV3 against MDSBI
 
-*Written by `{cmd}` from its own output ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}).
+*Written by `{cmd}` from its own output.
 This version: `{command or cmd}` (runs reused from `out/tpv3/`; the 100 m cross-check of the
 displacement scheme from `.venv/bin/python {cmd} --formulation displacement --dx 100`).
 `nice -n 10 .venv/bin/python {cmd}` alone runs what is missing (both runs: about an hour on
@@ -621,8 +621,8 @@ store `out/tpv3/displacement/`), next to the product scheme of the main runs and
         rows = "\n".join(rows)
         text += f"""## Time step: beta = 0.25 against tpv3's default
 
-The same runs with twice the time step (`tpv3(..., beta=0.25)`, the builder's default
-before this comparison; stores `out/tpv3/beta0.25/`), next to the main runs. Rupture time
+The same runs with twice the time step (`tpv3(..., beta=0.25)`; stores
+`out/tpv3/beta0.25/`), next to the main runs. Rupture time
 in s (difference from MDSBI), peak slip rate difference from MDSBI (beta 0.25 / main run):
 
 | station | dx | rupture time, beta 0.25 | main run | MDSBI | peak rate (%) | beta | t_end (s) |
