@@ -18,7 +18,7 @@ from .solve import solve_velocity  # noqa: F401
 def _discover() -> dict:
     found = {}
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
-        if info.name in ("base", "solve"):
+        if info.name in ("base", "solve", "friction"):
             continue
         module = importlib.import_module(f"{__name__}.{info.name}")
         for obj in vars(module).values():

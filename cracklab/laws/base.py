@@ -13,7 +13,9 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 * methods: ``init_state(grid)``, ``update(state, delta, dt, v_prev, t, tau_prev)`` (step
   (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
   ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
-  strength depends on v) and ``fracture_energy`` (the energy budget) have defaults.
+  strength depends on v), ``applied_strength`` and ``fracture_energy`` (the energy
+  budget) have defaults. A friction law derives from :class:`cracklab.laws.friction.Friction`
+  and writes its ``coefficient`` instead of ``strength``.
 """
 from __future__ import annotations
 
@@ -101,6 +103,15 @@ class Law:
     def solve(self, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
         """Step (v): the velocity (and traction) from the elastic estimate ``tau_star``."""
         return solve_velocity(self, state, tau_star, delta, eta, dt, strength, load, traction)
+
+    def applied_strength(self, strength, tau):
+        """The strength step (v) applied (what the recorder records as ``strength``),
+        from ``strength`` (of :meth:`strength`) and the traction ``tau`` of the step."""
+        return strength
+
+    #: components the scene must load for the law to work (a friction law that follows
+    #: the normal traction needs the normal component)
+    needs = ()
 
     def fracture_energy(self, state_history):
         """Fracture energy per unit area reached, from ``{name: array}`` of the state the

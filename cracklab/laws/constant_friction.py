@@ -6,25 +6,26 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import check_fields_nesting
-from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
+from .base import bonded_mask, check_parameter, parameter
+from .friction import Friction
 
 
 @dataclass(frozen=True)
-class ConstantFriction(Law):
-    """Shear strength ``mu_f sigma_n`` (``sigma_n`` compressive positive): the plane slides
-    where the shear traction would exceed it, with the slip rate collinear with the traction."""
+class ConstantFriction(Friction):
+    """Shear strength ``mu_f sigma_n`` (``sigma_n`` compressive positive; None: the current
+    normal traction, laws/friction.py): the plane slides where the shear traction would
+    exceed it, with the slip rate collinear with the traction."""
 
     mu_f: float | np.ndarray = parameter()
-    sigma_n: float | np.ndarray = parameter(unit="stress")
+    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
     bonded: np.ndarray | None = bonded_mask()
     kind = "constant_friction"
-    components = SHEAR
-    reads_slip = False
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
         check_parameter(self, "mu_f", allow_equal=True)
-        check_parameter(self, "sigma_n", allow_equal=True)
+        if self.sigma_n is not None:
+            check_parameter(self, "sigma_n", allow_equal=True)
 
     def init_state(self, grid):
         return {}
@@ -32,5 +33,5 @@ class ConstantFriction(Law):
     def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         pass
 
-    def strength(self, state, t, grid):
-        return self.mu_f * self.sigma_n
+    def coefficient(self, state, t, grid):
+        return self.mu_f

@@ -6,25 +6,25 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, check_fields_nesting
-from .base import SHEAR, Law, bonded_mask, check_parameter, parameter
+from .base import SHEAR, bonded_mask, check_parameter, parameter
+from .friction import Friction
 
 
 @dataclass(frozen=True)
-class SlipWeakening(Law):
+class SlipWeakening(Friction):
     """Linear slip-weakening friction: mu_s sigma_n -> mu_d sigma_n over D_c of slip.
 
-    ``sigma_n`` is the (compressive positive) normal stress; the slip is the
-    accumulated slip path. In 3D the slip rate is collinear with the shear traction.
+    ``sigma_n`` is the (compressive positive) normal stress; None: the current normal
+    traction, max(0, -tau_2) (laws/friction.py). The slip is the accumulated slip path.
+    In 3D the slip rate is collinear with the shear traction.
     """
 
     mu_s: float | np.ndarray = parameter()
     mu_d: float | np.ndarray = parameter()
     D_c: float | np.ndarray = parameter(unit="length")
-    sigma_n: float | np.ndarray = parameter(unit="stress")
+    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
     bonded: np.ndarray | None = bonded_mask()
-    reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "slip_weakening"
-    components = SHEAR
     state_variables = {"slip": ("slip path", "length")}
     energy_state = "slip"
 
@@ -33,7 +33,8 @@ class SlipWeakening(Law):
         check_parameter(self, "mu_s", allow_equal=True)
         check_parameter(self, "mu_d", allow_equal=True)
         check_parameter(self, "D_c")
-        check_parameter(self, "sigma_n", allow_equal=True)
+        if self.sigma_n is not None:
+            check_parameter(self, "sigma_n", allow_equal=True)
         try:
             above = np.asarray(self.mu_d) > np.asarray(self.mu_s)
         except ValueError:          # fields of different shapes: the scene names the wrong one
@@ -51,9 +52,9 @@ class SlipWeakening(Law):
             speed = np.sqrt(sum(v_prev[c] ** 2 for c in v_prev if c in SHEAR))
             state["slip"] += dt * speed
 
-    def strength(self, state, t, grid):
+    def coefficient(self, state, t, grid):
         weakening = np.clip(state["slip"] / self.D_c, 0.0, 1.0)
-        return (self.mu_s - (self.mu_s - self.mu_d) * weakening) * self.sigma_n
+        return self.mu_s - (self.mu_s - self.mu_d) * weakening
 
     def failed(self, state):
         return state["slip"] >= self.D_c

@@ -145,7 +145,14 @@ class Scene:
                                            "to measure it from")
         for c in self.loading.loaded():
             if c not in self.law.components:
-                raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}")
+                hint = " (without sigma_n it follows the normal traction tau0_2 + f_2)" \
+                    if c == 2 and hasattr(self.law, "follows_normal") else ""
+                raise InputError(f"loading.tau0_{c}", f"law {self.law.kind!r} does not act on component {c}{hint}")
+        for c in self.law.needs:
+            if c not in active:
+                raise InputError(f"loading.tau0_{c}", f"must be loaded: law {self.law.kind!r} without sigma_n "
+                                                      f"follows the normal traction (tau0_{c} < 0: compression), "
+                                                      f"or give law.sigma_n")
         bmax = self.beta_max
         if self.beta is None:  # the default: 0.5, or the stable limit where that is lower
             object.__setattr__(self, "beta", min(DEFAULT_BETA, bmax))

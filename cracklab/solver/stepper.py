@@ -131,7 +131,8 @@ class Stepper:
             scheme.finish(self, n, v_new)
             self.v, self.tau, self.n = v_new, tau, n + 1
             self._check(n, t, v_new, self.load.factor(t, length))
-            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(strength, grid.shape), self.lstate)
+            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(law.applied_strength(strength, tau), grid.shape),
+                        self.lstate)
 
     def crack_length(self, state):
         """Mean crack length of constant-K loading for the law state ``state`` (None when

@@ -34,7 +34,11 @@ class Velocity(Scheme):
         return f, {c: delta[c] + dt * v[c] for c in run.comps}, None
 
     def finish(self, run, n, v_new):
-        """The semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0)."""
+        """The semi-implicit update (50) for n >= 1; delta_0 = 0 (the load starts at t = 0).
+        With contact the opening is then kept >= 0: step (v) bounds v_n with the trial
+        opening, which the trapezoid of (50) can overshoot at the step the faces close."""
         if n > 0:
             for c in run.comps:
                 add_mean_step(run.delta[c], 0.5 * run.scene.dt, run.v[c], v_new[c])
+            if 2 in run.comps and run.scene.law.contact:
+                np.maximum(run.delta[2], 0.0, out=run.delta[2])
