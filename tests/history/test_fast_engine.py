@@ -209,7 +209,7 @@ def test_memory_does_not_grow_with_the_step_count():
     assert e.n == 5000
     assert e.state_shapes() == shapes and e.nbytes == nbytes
     assert nbytes < 24 * (8 * 16 * e.pairs)  # a few P-sized complex arrays per mode
-    assert d._buf.nbytes > 24 * 16 * 200  # the direct engine's buffer grows with n
+    assert d.buffer_nbytes > 24 * 16 * 200  # the direct engine's buffer grows with n
 
 
 def test_registration_window_and_arguments():
@@ -389,7 +389,7 @@ def test_product_start_weight_against_the_exact_start_term(kernel):
     e = ExponentialEngine(kernel=kernel, gamma=gam, nu=NU, rule="product", formulation="velocity", lag=1,
                           nsteps=500)
     z0 = abs(float(K.Z(kernel, 0.0, NU)))
-    j0 = e._j0_u[np.searchsorted(e._ug, gam)]
+    j0 = e.j0
     worst_fit = 0.0
     for n in range(1, 401):
         got = e.start_weight(n)
