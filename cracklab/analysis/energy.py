@@ -56,6 +56,7 @@ import xarray as xr
 
 from ..solver import kernels
 from ..errors import InputError
+from ..laws.base import cell_area_and_width, failed_length
 from ..model.record import Record
 from ..solver.response import active_channels, split_channels
 
@@ -266,19 +267,18 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
     if kind == "delta_max" and law.initial_crack is not None:
         initial = np.asarray(law.initial_crack, dtype=bool)
     state = np.where(initial, np.inf, 0.0) if kind else None
-    area = dA
-    width = grid.L3 if not grid.plane else 1.0
+    area, width = cell_area_and_width(grid)     # for the crack length of constant-K loading
     l0 = None
     if load.constant_K:
         l0 = load.l0
         if l0 is None and kind == "delta_max":
-            l0 = float(np.count_nonzero(initial)) * area / width
+            l0 = failed_length(initial, area, width)
 
     def tau0_at(k, st):
         length = None
         if load.constant_K and kind == "delta_max":
             failed = st >= np.asarray(law.delta_c)
-            length = float(np.count_nonzero(failed)) * area / width or l0
+            length = failed_length(failed, area, width) or l0
         return {c: np.broadcast_to(np.asarray(v, dtype=float), grid.shape)
                 for c, v in load.at(t[k], comps, length).items()}
 

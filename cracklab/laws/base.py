@@ -73,6 +73,22 @@ def check_parameter(law, name, lower=0.0, allow_equal=False, allow_inf=False):
         object.__setattr__(law, name, float(arr))
 
 
+def cell_area_and_width(grid) -> tuple[float, float]:
+    """Area of a cell of ``grid`` and the width of the plane across the crack: dx1 dx3 and
+    L3, or dx1 and 1 in the plane problem (whose areas and lengths are per unit length along x3)."""
+    return grid.dx1 * (grid.dx3 if not grid.plane else 1.0), (grid.L3 if not grid.plane else 1.0)
+
+
+def failed_length(failed, cell_area: float, width: float):
+    """Mean crack length of the failed cells: their area over the width of the plane across
+    the crack (:func:`cell_area_and_width`), ``count * cell_area / width`` in that order (the
+    constant-K load of a run scales with it, to the bit).  ``failed``: a boolean array
+    (:meth:`Law.failed`; a float comes back) or numbers of failed cells (integers, e.g. one
+    per time; an array comes back)."""
+    failed = np.asarray(failed)
+    if failed.dtype == bool:
+        return float(np.count_nonzero(failed)) * cell_area / width
+    return failed * cell_area / width
 
 
 class Law:
