@@ -13,7 +13,12 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 * methods: ``init_state(grid)``, ``update(state, delta, dt, v_prev, t, tau_prev)`` (step
   (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
   ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
-  strength depends on v) and ``fracture_energy`` (the energy budget) have defaults.
+  strength depends on v) have defaults;
+* the energy budget's part (:mod:`cracklab.analysis.energy`), which rebuilds the state
+  from the recorded slip: ``energy_state(grid)`` (the rebuilt state at t = 0; None: the
+  law has none and gives no fracture energy), ``energy_update(state, delta, delta_prev)``
+  (to the next snapshot), ``fracture_energy(state)`` and ``energy_failed(state)`` (for the
+  crack length of constant-K loading); none by default.
 """
 from __future__ import annotations
 
@@ -118,13 +123,25 @@ class Law:
         """Step (v): the velocity (and traction) from the elastic estimate ``tau_star``."""
         return solve_velocity(self, state, tau_star, delta, eta, dt, strength, load, traction)
 
-    def fracture_energy(self, state_history):
-        """Fracture energy per unit area reached, from ``{name: array}`` of the state the
-        energy budget reconstructs (``energy_state``); None when the law dissipates none."""
+    def energy_state(self, grid):
+        """The state the energy budget rebuilds from the recorded slip, at t = 0 (``{name:
+        array}``), or None when the law has none (the budget then gives no fracture energy)."""
         return None
 
-    #: the state variable the energy budget rebuilds from the recorded slip (None: none)
-    energy_state = None
+    def energy_update(self, state, delta, delta_prev) -> None:
+        """Bring the rebuilt ``state`` (:meth:`energy_state`) to the snapshot whose slip is
+        ``delta`` ({component: array}); ``delta_prev`` is the previous snapshot's (None at the
+        first)."""
+
+    def energy_failed(self, state):
+        """Where the plane has failed in the rebuilt ``state``, for the crack length of
+        constant-K loading in the budget (None: the budget gives the load no crack length)."""
+        return None
+
+    def fracture_energy(self, state):
+        """Fracture energy per unit area reached (an array over the plane) in the rebuilt
+        ``state`` (:meth:`energy_state`); None when the law dissipates none."""
+        return None
 
 
 def law_parameters(law) -> dict:

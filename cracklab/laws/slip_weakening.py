@@ -26,7 +26,6 @@ class SlipWeakening(Law):
     kind = "slip_weakening"
     components = SHEAR
     state_variables = {"slip": ("slip path", "length")}
-    energy_state = "slip"
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
@@ -58,9 +57,18 @@ class SlipWeakening(Law):
     def failed(self, state):
         return state["slip"] >= self.D_c
 
-    def fracture_energy(self, slip, initial):
+    def energy_state(self, grid):
+        """The budget rebuilds the slip path: the initial state (none) to begin with."""
+        return self.init_state(grid)
+
+    def energy_update(self, state, delta, delta_prev):
+        """The slip path grows by the length of the shear slip's change since the last snapshot."""
+        if delta_prev is not None:
+            state["slip"] = state["slip"] + np.sqrt(sum((delta[c] - delta_prev[c]) ** 2 for c in delta if c in SHEAR))
+
+    def fracture_energy(self, state):
         """G reached so far: (mu_s - mu_d) sigma_n (m - m^2 / (2 D_c)) with m = min(slip, D_c)."""
         Dc = np.asarray(self.D_c, dtype=float)
-        m = np.minimum(slip, Dc)
+        m = np.minimum(state["slip"], Dc)
         drop = (np.asarray(self.mu_s) - np.asarray(self.mu_d)) * np.asarray(self.sigma_n)
         return drop * (m - m * m / (2.0 * Dc))
