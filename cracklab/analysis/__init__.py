@@ -14,14 +14,21 @@ asperity_row`` and ``random_toughness``). Two views of where the crack is:
 Both search along +x1, per x3, from ``start`` (the tip of the initial crack by default)
 for the first point that has not failed, and place the front between it and the failed
 point behind it by linear interpolation (of the rupture time, or of the opening).
+
+The crack length of the failed area (:func:`failed_length`: the failed cells' area over
+the plane's width across the crack, with :func:`cell_area_and_width`) is the one
+definition the constant-K load of a run, the energy budget and
+:func:`cracklab.plots.crack_length` use; :func:`mean_crack_length` is the front's.
 """
 from __future__ import annotations
 
 import numpy as np
 import xarray as xr
 
-__all__ = ["initial_front", "front_position", "mean_crack_length", "front_speed", "cohesive_zone",
-           "roughness", "structure_function"]
+from ..laws.base import cell_area_and_width, failed_length
+
+__all__ = ["initial_front", "front_position", "mean_crack_length", "failed_length", "cell_area_and_width",
+           "front_speed", "cohesive_zone", "roughness", "structure_function"]
 
 
 # ---------------------------------------------------------------------------- helpers

@@ -56,6 +56,7 @@ import xarray as xr
 
 from ..solver import kernels
 from ..errors import InputError
+from ..laws.base import cell_area_and_width, failed_length
 from ..model.record import Record
 from ..solver.halfspace import active_channels, split_channels
 
@@ -208,17 +209,6 @@ def _cadence(t, dt):
     return h, uniform, every
 
 
-def _interface_state(law, comps):
-    """The running state the energy budget rebuilds from the recorded slip (the law's
-    ``energy_state``: the max opening for a cohesive law, the slip path for slip weakening)."""
-    return law.energy_state
-
-
-def _fracture_density(law, kind, state, initial):
-    """Fracture energy per unit area reached so far (array over the plane), or None."""
-    return None if kind is None else law.fracture_energy(state, initial)
-
-
 def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chunk: int = 64) -> xr.Dataset:
     """Energy budget of the run ``ds`` (a cracklab Dataset recorded with ``energy_record``).
 
@@ -261,24 +251,21 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
     eta = {c: mat.eta(c) for c in comps}
     nt = t.size
 
-    kind = _interface_state(law, comps)
-    initial = np.zeros(grid.shape, dtype=bool)
-    if kind == "delta_max" and law.initial_crack is not None:
-        initial = np.asarray(law.initial_crack, dtype=bool)
-    state = np.where(initial, np.inf, 0.0) if kind else None
-    area = dA
-    width = grid.L3 if not grid.plane else 1.0
+    # the law's state rebuilt from the recorded slip (the law says which: Law.energy_state)
+    state = law.energy_state(grid)
+    area, width = cell_area_and_width(grid)     # for the crack length of constant-K loading
     l0 = None
     if load.constant_K:
         l0 = load.l0
-        if l0 is None and kind == "delta_max":
-            l0 = float(np.count_nonzero(initial)) * area / width
+        failed = law.energy_failed(state) if state is not None else None
+        if l0 is None and failed is not None:
+            l0 = failed_length(failed, area, width)
 
     def tau0_at(k, st):
         length = None
-        if load.constant_K and kind == "delta_max":
-            failed = st >= np.asarray(law.delta_c)
-            length = float(np.count_nonzero(failed)) * area / width or l0
+        failed = law.energy_failed(st) if load.constant_K and st is not None else None
+        if failed is not None:
+            length = failed_length(failed, area, width) or l0
         return {c: np.broadcast_to(np.asarray(v, dtype=float), grid.shape)
                 for c, v in load.at(t[k], comps, length).items()}
 
@@ -302,13 +289,11 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
             dl = {c: block[f"delta_{c}"][i] for c in comps}
             ta = {c: block[f"tau_{c}"][i] for c in comps}
             ve = {c: block[f"v_{c}"][i] for c in comps} if has_v else None
-            if kind == "delta_max" and 2 in dl:
-                state = np.maximum(state, dl[2])
-            elif kind == "slip" and prev is not None:
-                state = state + np.sqrt(sum((dl[c] - prev[0][c]) ** 2 for c in comps if c in (1, 3)))
+            if state is not None:
+                law.energy_update(state, dl, prev[0] if prev is not None else None)
             t0 = tau0_at(k, state)
-            if kind is not None:
-                g = _fracture_density(law, kind, state, initial)
+            if state is not None:
+                g = law.fracture_energy(state)
                 frac[k] = dA * float(np.sum(g))
             if prev is not None:
                 pdl, pta, pve, pt0 = prev
@@ -333,7 +318,7 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
                         Vh[ch][k - 1] = Vk[ch]
             prev = (dl, ta, ve, t0)
     dU = U - U[0]
-    frac = frac - frac[0] if kind is not None else frac
+    frac = frac - frac[0] if state is not None else frac
     rad_bal = W - dU - D
     rad_flux = np.full(nt, np.nan)
     if flux and uniform:
@@ -354,8 +339,8 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
     dunit = "1" if eunit == "1" else f"{u['stress']} {u['length']}"
     out["dissipation_density"] = (("x1", "x3"), d_density,
                                   {"long_name": "energy dissipated per unit area of the plane", "units": dunit})
-    if kind is not None:
-        out["fracture_energy_density"] = (("x1", "x3"), _fracture_density(law, kind, state, initial),
+    if state is not None:
+        out["fracture_energy_density"] = (("x1", "x3"), law.fracture_energy(state),
                                           {"long_name": "fracture energy per unit area", "units": dunit})
     out.attrs = {"scene": scene.name, "rule": rule, "cadence_steps": -1 if every is None else every,
                  "energy_scale": scale, "per_unit_length_x3": int(grid.plane)}

@@ -117,6 +117,12 @@ class DirectEngine:
 
     overlap = False  # no work left for a worker thread (see ExponentialEngine.overlap)
 
+    @property
+    def buffer_nbytes(self) -> int:
+        """Bytes of the ring buffer of past values (doubles as the history outgrows it,
+        unless a window bounds it)."""
+        return int(self._buf.nbytes)
+
     def launch(self) -> None:
         """Nothing to start: the direct engine does all its work in push (see ExponentialEngine.launch)."""
 

@@ -52,7 +52,7 @@ from . import tables
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
 
-__all__ = ["ExponentialEngine", "direct_taps"]
+__all__ = ["ExponentialEngine", "backend_choice", "direct_taps", "exact_weights", "worker"]
 
 # levels for the number of direct taps: grouping modes by level keeps the
 # number of per-step numpy calls small (a mode gets at most ~25 % extra taps)
@@ -125,8 +125,10 @@ def _start_factor(z):
     return -np.where(small, 0.5 + z / 6.0 + z * z / 24.0, (np.expm1(zs) - zs) / (zs * zs))
 
 
-def _exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
-    """The exact weights w_k (or, with part "start0", the product rule's E_0(k))."""
+def exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
+    """The exact weights w_k (or, with part "start0", the product rule's E_0(k)) of the engine's
+    direct taps: :func:`cracklab.solver.weights.product_weights` (order 1) for the product rule,
+    :func:`cracklab.solver.weights.convolution_weights` otherwise."""
     if rule == "product":
         from ..solver.weights import product_weights
 
@@ -162,7 +164,7 @@ def _make_power_sum():
 def _power_sum(pw, rho, coef, factor, out):
     global _POWER_SUM
     if _POWER_SUM is None:
-        _POWER_SUM = _make_power_sum() if _backend_choice() != "numpy" else _power_sum_numpy
+        _POWER_SUM = _make_power_sum() if backend_choice() != "numpy" else _power_sum_numpy
     _POWER_SUM(pw, rho, coef, factor, out)
 
 
@@ -184,7 +186,7 @@ def _overlap_env():
     return os.environ.get("CRACKLAB_OVERLAP", "1") != "0"
 
 
-def _worker():
+def worker():
     """The process's history worker thread (one; recreated in a forked child)."""
     global _POOL
     if _POOL is None or _POOL[0] != os.getpid():
@@ -206,8 +208,9 @@ def _blocked():
     return _BLOCKED or None
 
 
-def _backend_choice():
-    """"numba" (the default when numba imports) or "numpy"."""
+def backend_choice():
+    """The backend new engines use: "numba" (the default when numba imports) or "numpy"
+    (``CRACKLAB_EXP_BACKEND`` forces one)."""
     env = os.environ.get("CRACKLAB_EXP_BACKEND", "").strip().lower()
     if env in ("numpy", "numba"):
         return env
@@ -254,7 +257,7 @@ class ExponentialEngine:
         self._n_max = math.inf if not math.isfinite(self.fit.T_end) or gmax == 0 else self.fit.T_end / gmax
         self.T0 = self.fit.T0
         self.pairs = self.fit.pairs
-        self.backend = _backend_choice()
+        self.backend = backend_choice()
         self.threads = int(threads or 1)
         self.n = 0
         # two or more threads: the states are advanced on a worker thread while the caller
@@ -268,9 +271,12 @@ class ExponentialEngine:
         self.taps_ahead = formulation != "displacement"
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
-        self._share = 0.0      # the caller's share of each eighth (see ``balance``)
+        #: the caller's share of each eighth's advance, in [0, 1/2] (see ``balance``; set by
+        #: :meth:`rebalance` after every step)
+        self.share = 0.0
         self._cut = None       # (step, first mode of the caller's share) of the pending advance
-        self._wtimes = None    # the worker's (start, end) of its last advance
+        #: the worker's (start, end) of its last advance (time.perf_counter seconds; None before one)
+        self.worker_times = None
         self._scale_src = self._scale_flat = None
 
         ug, inv = np.unique(self.gamma, return_inverse=True)
@@ -289,7 +295,7 @@ class ExponentialEngine:
         # q = 0: every weight beyond the first is K(0)
         exact = dict(nu=nu, rule=rule, formulation=formulation)
         self._exact = exact
-        self._k0_zero = k0 = float(_exact_weights(kernel, 0.0, self.lag + 1, **exact))
+        self._k0_zero = k0 = float(exact_weights(kernel, 0.0, self.lag + 1, **exact))
         if np.any(zero):
             # one running-sum state, the others switched off
             rho_u[zero] = 0.0
@@ -307,10 +313,10 @@ class ExponentialEngine:
         key = ("exponential-taps", kernel, tables.digest(ug), tables.digest(jd_u), self.lag, float(nu), rule,
                formulation)
         self._wflat = tables.memoised(key + ("lag",), lambda: np.asarray(
-            _exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel())
+            exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel())
         if rule == "product":  # start-up term E_0(n): exact for n < J0, fitted beyond
             self._e0flat = tables.memoised(key + ("start0",), lambda: np.asarray(
-                _exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact), dtype=float).ravel())
+                exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact), dtype=float).ravel())
             self._e0c = 2.0 * c[None, :] * _start_factor(z)
             self._e0c[zero] = 0.0
             self._e0pow = None
@@ -433,9 +439,27 @@ class ExponentialEngine:
         """Whether the caller takes a share of each eighth's advance before it waits for the
         worker: with overlap where the taps stay with the caller (the displacement scheme,
         whose worker is the longer thread); the share follows the measured imbalance
-        (:meth:`_rebalance`).  With the taps ahead, the worker adds them to whole rows after
+        (:meth:`rebalance`).  With the taps ahead, the worker adds them to whole rows after
         the advance, so the eighth stays whole."""
         return self.overlap and not self.taps_ahead
+
+    @property
+    def pending(self) -> bool:
+        """Whether an advance launched on the worker is not yet joined (by the next push,
+        get_state or wait)."""
+        return self._pending is not None
+
+    @property
+    def cut(self):
+        """(n, cut) of the advance last launched: of the eighth of step n (:meth:`eighth`), the
+        worker advances the modes below ``cut``, the caller the rest (None before a launch)."""
+        return self._cut
+
+    @property
+    def j0(self) -> np.ndarray:
+        """J0 of every mode (integers, shape of gamma): the weights w_k with k < J0 are exact
+        (the direct taps), those from J0 on come from the fit."""
+        return self._j0_u[self._inv].reshape(self.shape)
 
     @property
     def _layout(self) -> str:
@@ -444,7 +468,7 @@ class ExponentialEngine:
         # "-modes": the states are kept in the modes' order (a state kept sorted by gamma is refused)
         return "numba-pretaps-modes" if self.taps_ahead else "numba-tapmajor-modes"
 
-    def _eighth(self, n):
+    def eighth(self, n):
         """(lo, hi): the modes lo .. hi - 1 of the eighth that step n advances."""
         return self._bounds[n % _BLOCK], self._bounds[n % _BLOCK + 1]
 
@@ -453,7 +477,7 @@ class ExponentialEngine:
         n .. n + 7 (blocked.advance), then (``taps_ahead``) add the taps 1 <= j < 8 of step n
         (blocked.pretaps).  ``part`` = (lo, hi): only the modes lo .. hi - 1 of
         the eighth (and no taps)."""
-        lo, hi = part or self._eighth(n)
+        lo, hi = part or self.eighth(n)
         _set_threads(threads)
         blocked = _blocked()
         if hi > lo:
@@ -483,10 +507,10 @@ class ExponentialEngine:
         """
         if self._due is not None and self._pending is None:
             n = self._due
-            lo, hi = self._eighth(n)
-            cut = hi - int(self._share * (hi - lo)) if self.balance else hi
+            lo, hi = self.eighth(n)
+            cut = hi - int(self.share * (hi - lo)) if self.balance else hi
             self._cut = (n, cut)
-            self._pending = _worker().submit(self._ahead, n, cut)
+            self._pending = worker().submit(self._ahead, n, cut)
             self._due = None
         elif self._pending is None:
             self._start_ahead()
@@ -495,10 +519,10 @@ class ExponentialEngine:
         """The worker's job after a push: the advance due (the eighth's modes
         below ``cut``), and the next start-up weight."""
         t0 = time.perf_counter()
-        lo, hi = self._eighth(n)
+        lo, hi = self.eighth(n)
         self._advance(n, 1, None if cut == hi else (lo, cut))
         self._start_ahead()
-        self._wtimes = (t0, time.perf_counter())
+        self.worker_times = (t0, time.perf_counter())
 
     def wait(self) -> None:
         """Finish the advance the last push left (on the worker or here): the engine is idle
@@ -511,27 +535,28 @@ class ExponentialEngine:
         pending, self._pending = self._pending, None
         if pending is not None:
             n, cut = self._cut
-            lo, hi = self._eighth(n)
+            lo, hi = self.eighth(n)
             if cut < hi:
                 self._advance(n, 1, (cut, hi))
             arrived = time.perf_counter()
             pending.result()
             if self.balance:
-                self._rebalance(arrived, cut - lo, hi - lo)
+                self.rebalance(arrived, cut - lo, hi - lo)
         if self._due is not None:
             due, self._due = self._due, None
             self._advance(due, self.threads)
 
-    def _rebalance(self, arrived, done_by_worker, size):
-        """Move part of the next eighths between the threads: a quarter of the measured
-        imbalance (the worker's end against the caller's arrival, at the worker's cost per
-        position), at most 2 % of an eighth per step, the caller's share within [0, 1/2]."""
-        start, end = self._wtimes
+    def rebalance(self, arrived, done_by_worker, size):
+        """Move part of the next eighths between the threads (``share``): a quarter of the
+        measured imbalance (the worker's end, ``worker_times``, against the caller's arrival
+        ``arrived``, at the worker's cost per position: ``done_by_worker`` of the eighth's
+        ``size`` modes), at most 2 % of an eighth per step, the caller's share within [0, 1/2]."""
+        start, end = self.worker_times
         if done_by_worker <= 0 or size <= 0:
             return
         cost = (end - start) / done_by_worker
         step = 0.25 * (end - arrived) / (cost * size) if cost > 0 else 0.0
-        self._share = min(0.5, max(0.0, self._share + min(0.02, max(-0.02, step))))
+        self.share = min(0.5, max(0.0, self.share + min(0.02, max(-0.02, step))))
 
     _CACHES = ("_wpow", "_wrho", "_wk", "_wcalls", "_e0pow", "_e0rho", "_e0n", "_e0next", "_e0next_n")
 
@@ -646,7 +671,7 @@ class ExponentialEngine:
         zero = ~direct & (ug == 0)
         if np.any(zero):  # gamma = 0: a constant kernel, E_0(n) is the same for every n >= 1
             if self._e0_zero is None:
-                self._e0_zero = float(_exact_weights(self.kernel, 0.0, 1, part="start0", **self._exact))
+                self._e0_zero = float(exact_weights(self.kernel, 0.0, 1, part="start0", **self._exact))
             out[zero] = self._e0_zero
         np.take(out, self._inv, out=dest.reshape(-1))
         self._e0next, self._e0next_n = dest, n

@@ -90,6 +90,10 @@ __all__ = [
     "check_fit",
     "get_fit",
     "cache_dir",
+    "cache_key",
+    "cache_path",
+    "load_cached",
+    "store_cached",
     "clear_memory_cache",
 ]
 
@@ -408,7 +412,9 @@ def cache_dir() -> Path:
     return base / "cracklab"
 
 
-def _key(kernel, nu, formulation, T0, tol, T_end=math.inf):
+def cache_key(kernel, nu, formulation, T0, tol, T_end=math.inf) -> tuple:
+    """What a fit's numbers depend on (the fit's arguments, FIT_VERSION and the constants of
+    the method): the key stored in its cache file and hashed into its name."""
     key = (FIT_VERSION, kernel, float(nu).hex(), formulation, float(T0).hex(), float(tol).hex(),
            float(T_FIT).hex(), _CUT_SHARE, _H, _UMIN, _UMAX)
     return key if not math.isfinite(T_end) else key + (float(T_end).hex(),)
@@ -426,13 +432,15 @@ def range_bucket(T_end) -> float:
     return math.inf if b > T_END_MAX else float(b)
 
 
-def _cache_path(key) -> Path:
+def cache_path(key) -> Path:
+    """The cache file of the fit of ``key`` (:func:`cache_key`) in :func:`cache_dir`."""
     digest = hashlib.sha256(repr(key).encode()).hexdigest()[:16]
     return cache_dir() / f"expfit-v{FIT_VERSION}-{key[1]}-{key[3]}-{digest}.npz"
 
 
-def _load(path: Path, key, kernel, nu, formulation, T0, tol, T_end=math.inf):
-    """The cached fit, or None if missing, unreadable, foreign or inaccurate."""
+def load_cached(path: Path, key, kernel, nu, formulation, T0, tol, T_end=math.inf):
+    """The fit cached in ``path`` under ``key``, or None if missing, unreadable, foreign or
+    inaccurate (a spot check against the kernel itself)."""
     try:
         with np.load(path, allow_pickle=False) as z:
             if str(z["key"]) != repr(key):
@@ -457,10 +465,11 @@ def _load(path: Path, key, kernel, nu, formulation, T0, tol, T_end=math.inf):
     return fit
 
 
-def _store(path: Path, key, fit: ExpFit, replace: bool = True):
-    """Write atomically (temp file in the same directory, then os.replace); never raises.
-    ``replace=False``: leave a file that another process wrote in the meantime (the first
-    fit stored is the one every process then reads, see get_fit)."""
+def store_cached(path: Path, key, fit: ExpFit, replace: bool = True):
+    """Store ``fit`` in the cache file ``path`` under ``key``, atomically (temp file in the
+    same directory, then os.replace); never raises.  ``replace=False``: leave a file that
+    another process wrote in the meantime (the first fit stored is the one every process
+    then reads, see get_fit)."""
     tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -503,11 +512,11 @@ def get_fit(kernel, nu=0.25, formulation="displacement", *, T0=DEFAULT_T0, tol=N
     tol = DEFAULT_TOL[kernel] if tol is None else tol
     nu, T0, tol = float(nu), float(T0), float(tol)
     T_end = range_bucket(T_end)
-    key = _key(kernel, nu, formulation, T0, tol, T_end)
+    key = cache_key(kernel, nu, formulation, T0, tol, T_end)
     path = None
     if use_disk:
         try:
-            path = _cache_path(key)
+            path = cache_path(key)
         except Exception:  # no usable home directory: memory cache only
             path = None
     # the fits in memory are those of their cache file: the last bits of a fit depend on the
@@ -520,14 +529,14 @@ def get_fit(kernel, nu=0.25, formulation="displacement", *, T0=DEFAULT_T0, tol=N
         return fit
     if path is not None:
         existed = path.exists()
-        fit = _load(path, key, kernel, nu, formulation, T0, tol, T_end)
+        fit = load_cached(path, key, kernel, nu, formulation, T0, tol, T_end)
     if fit is None:
         fit = fit_kernel(kernel, nu=nu, formulation=formulation, T0=T0, tol=tol, T_end=T_end)
         if path is not None:
             # a bad file is replaced; a new one only if no other process stored its fit first,
             # whose fit is then read back and used here too
-            _store(path, key, fit, replace=existed)
-            fit = _load(path, key, kernel, nu, formulation, T0, tol, T_end) or fit
+            store_cached(path, key, fit, replace=existed)
+            fit = load_cached(path, key, kernel, nu, formulation, T0, tol, T_end) or fit
     with _LOCK:
         _MEMORY[mkey] = fit
     return fit

@@ -94,6 +94,12 @@ def weight_table(kernel, gamma, j0: int, j1: int, *, nu, rule="trapezoid",
     return memoised(key, lambda: _compute(kernel, gamma, j0, j1, nu, rule, formulation))
 
 
+def cached_tables() -> list:
+    """The tables the cache holds (read-only arrays), least recently used first."""
+    with _lock:
+        return list(_cache.values())
+
+
 def clear() -> None:
     """Empty the cache and reset the counters."""
     with _lock:

@@ -13,9 +13,14 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 * methods: ``init_state(grid)``, ``update(state, delta, dt, v_prev, t, tau_prev)`` (step
   (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
   ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
-  strength depends on v), ``applied_strength`` and ``fracture_energy`` (the energy
-  budget) have defaults. A friction law derives from :class:`cracklab.laws.friction.Friction`
-  and writes its ``coefficient`` instead of ``strength``.
+  strength depends on v) and ``applied_strength`` (the strength it applied) have
+  defaults; a friction law derives from :class:`cracklab.laws.friction.Friction` and
+  writes its ``coefficient`` instead of ``strength``;
+* the energy budget's part (:mod:`cracklab.analysis.energy`), which rebuilds the state
+  from the recorded slip: ``energy_state(grid)`` (the rebuilt state at t = 0; None: the
+  law has none and gives no fracture energy), ``energy_update(state, delta, delta_prev)``
+  (to the next snapshot), ``fracture_energy(state)`` and ``energy_failed(state)`` (for the
+  crack length of constant-K loading); none by default.
 """
 from __future__ import annotations
 
@@ -75,6 +80,22 @@ def check_parameter(law, name, lower=0.0, allow_equal=False, allow_inf=False):
         object.__setattr__(law, name, float(arr))
 
 
+def cell_area_and_width(grid) -> tuple[float, float]:
+    """Area of a cell of ``grid`` and the width of the plane across the crack: dx1 dx3 and
+    L3, or dx1 and 1 in the plane problem (whose areas and lengths are per unit length along x3)."""
+    return grid.dx1 * (grid.dx3 if not grid.plane else 1.0), (grid.L3 if not grid.plane else 1.0)
+
+
+def failed_length(failed, cell_area: float, width: float):
+    """Mean crack length of the failed cells: their area over the width of the plane across
+    the crack (:func:`cell_area_and_width`), ``count * cell_area / width`` in that order (the
+    constant-K load of a run scales with it, to the bit).  ``failed``: a boolean array
+    (:meth:`Law.failed`; a float comes back) or numbers of failed cells (integers, e.g. one
+    per time; an array comes back)."""
+    failed = np.asarray(failed)
+    if failed.dtype == bool:
+        return float(np.count_nonzero(failed)) * cell_area / width
+    return failed * cell_area / width
 
 
 class Law:
@@ -113,13 +134,25 @@ class Law:
     #: the normal traction needs the normal component)
     needs = ()
 
-    def fracture_energy(self, state_history):
-        """Fracture energy per unit area reached, from ``{name: array}`` of the state the
-        energy budget reconstructs (``energy_state``); None when the law dissipates none."""
+    def energy_state(self, grid):
+        """The state the energy budget rebuilds from the recorded slip, at t = 0 (``{name:
+        array}``), or None when the law has none (the budget then gives no fracture energy)."""
         return None
 
-    #: the state variable the energy budget rebuilds from the recorded slip (None: none)
-    energy_state = None
+    def energy_update(self, state, delta, delta_prev) -> None:
+        """Bring the rebuilt ``state`` (:meth:`energy_state`) to the snapshot whose slip is
+        ``delta`` ({component: array}); ``delta_prev`` is the previous snapshot's (None at the
+        first)."""
+
+    def energy_failed(self, state):
+        """Where the plane has failed in the rebuilt ``state``, for the crack length of
+        constant-K loading in the budget (None: the budget gives the load no crack length)."""
+        return None
+
+    def fracture_energy(self, state):
+        """Fracture energy per unit area reached (an array over the plane) in the rebuilt
+        ``state`` (:meth:`energy_state`); None when the law dissipates none."""
+        return None
 
 
 def law_parameters(law) -> dict:

@@ -27,7 +27,6 @@ class LinearCohesive(Law):
     components = NORMAL
     contact = True
     state_variables = {"delta_max": ("largest opening reached", "length")}
-    energy_state = "delta_max"
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
@@ -52,10 +51,22 @@ class LinearCohesive(Law):
     def failed(self, state):
         return self.broken(state)
 
-    def fracture_energy(self, delta_max, initial):
+    def energy_state(self, grid):
+        """The budget rebuilds the largest opening reached: the initial state to begin with."""
+        return self.init_state(grid)
+
+    def energy_update(self, state, delta, delta_prev):
+        if 2 in delta:
+            state["delta_max"] = np.maximum(state["delta_max"], delta[2])
+
+    def energy_failed(self, state):
+        return self.failed(state)
+
+    def fracture_energy(self, state):
         """G reached so far: the work of the cohesive traction, tau_c (m - m^2 / (2 delta_c)) with
         m = min(delta_max, delta_c); none on the initial crack."""
         dc = np.asarray(self.delta_c, dtype=float)
-        m = np.minimum(delta_max, dc)
+        m = np.minimum(state["delta_max"], dc)
         g = np.asarray(self.tau_c, dtype=float) * (m - m * m / (2.0 * dc))
+        initial = False if self.initial_crack is None else np.asarray(self.initial_crack, dtype=bool)
         return np.where(initial, 0.0, g)

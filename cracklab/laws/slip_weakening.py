@@ -26,7 +26,6 @@ class SlipWeakening(Friction):
     bonded: np.ndarray | None = bonded_mask()
     kind = "slip_weakening"
     state_variables = {"slip": ("slip path", "length")}
-    energy_state = "slip"
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
@@ -59,9 +58,20 @@ class SlipWeakening(Friction):
     def failed(self, state):
         return state["slip"] >= self.D_c
 
-    def fracture_energy(self, slip, initial):
+    def energy_state(self, grid):
+        """The budget rebuilds the slip path: the initial state (none) to begin with. None
+        when the strength follows the normal traction: its G needs that traction's history,
+        and the budget then gives no fracture energy."""
+        return None if self.follows_normal else self.init_state(grid)
+
+    def energy_update(self, state, delta, delta_prev):
+        """The slip path grows by the length of the shear slip's change since the last snapshot."""
+        if delta_prev is not None:
+            state["slip"] = state["slip"] + np.sqrt(sum((delta[c] - delta_prev[c]) ** 2 for c in delta if c in SHEAR))
+
+    def fracture_energy(self, state):
         """G reached so far: (mu_s - mu_d) sigma_n (m - m^2 / (2 D_c)) with m = min(slip, D_c)."""
         Dc = np.asarray(self.D_c, dtype=float)
-        m = np.minimum(slip, Dc)
+        m = np.minimum(state["slip"], Dc)
         drop = (np.asarray(self.mu_s) - np.asarray(self.mu_d)) * np.asarray(self.sigma_n)
         return drop * (m - m * m / (2.0 * Dc))

@@ -24,6 +24,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ..analysis import cell_area_and_width, failed_length
+
 __all__ = ["snapshot", "rupture_contours", "crack_length", "crack_length_plot", "ensemble_summary",
            "ensemble_panels", "animate", "summary_figures"]
 
@@ -240,15 +242,9 @@ def crack_length(ds, t=None, *, n=256) -> xr.DataArray:
     length_units = ds["x1"].attrs.get("units", "1") if "x1" in ds.coords else "1"
 
     def one(values, scene):
-        g = scene.get("grid", {})
-        if {"n1", "n3", "L1", "L3"} <= set(g):
-            cell = (g["L1"] / g["n1"]) * (g["L3"] / g["n3"]) / g["L3"]
-        else:
-            x1, x3 = ds["x1"].values, ds["x3"].values
-            dx1 = float(np.median(np.diff(x1))) if len(x1) > 1 else 1.0
-            cell = dx1 / (len(x3) if len(x3) > 1 else 1.0)
+        area, width = _cell_area_and_width(ds, scene)
         v = np.sort(values[np.isfinite(values)].ravel())
-        return np.searchsorted(v, t, side="right") * cell
+        return failed_length(np.searchsorted(v, t, side="right"), area, width)  # failed cells at each t
 
     attrs = {"long_name": "mean crack length (ruptured area / L3)", "units": length_units}
     tc = ("t", t, {"long_name": "time", "units": units})
@@ -259,6 +255,24 @@ def crack_length(ds, t=None, *, n=256) -> xr.DataArray:
                             attrs=attrs)
     return xr.DataArray(one(rt.values, scenes[0]), dims=("t",), coords={"t": tc}, name="crack_length",
                         attrs=attrs)
+
+
+def _cell_area_and_width(ds, scene) -> tuple[float, float]:
+    """The cell area and the width across the crack (:func:`cracklab.analysis.cell_area_and_width`)
+    of the scene's grid; without one, of the recorded coordinates: dx1 and the number of
+    nodes along x3 (the width in units of dx3)."""
+    from ..errors import InputError
+    from ..model.grid import Grid
+
+    g = scene.get("grid", {})
+    if {"n1", "n3", "L1", "L3"} <= set(g):
+        try:
+            return cell_area_and_width(Grid(n1=g["n1"], n3=g["n3"], L1=g["L1"], L3=g["L3"]))
+        except (InputError, TypeError):
+            pass
+    x1, x3 = ds["x1"].values, ds["x3"].values
+    dx1 = float(np.median(np.diff(x1))) if len(x1) > 1 else 1.0
+    return dx1, float(len(x3) if len(x3) > 1 else 1)
 
 
 def _numeric_coord(ds, name):

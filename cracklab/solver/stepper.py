@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SimulationError
+from ..laws.base import cell_area_and_width, failed_length
 from .interfaces import for_scene as interface_for_scene
 from .schemes import SCHEMES
 from .spectral import Transforms
@@ -63,7 +64,7 @@ class Stepper:
         self.scene = scene
         grid, comps = scene.grid, scene.components
         self.comps = comps          # scene.components tests the load fields: once, not every step
-        self._area_width = _cell_area_and_width(grid)  # for the crack length of constant-K loading
+        self._area_width = cell_area_and_width(grid)  # for the crack length of constant-K loading
         self.scheme = SCHEMES[scene.formulation]
         if response is None:
             response = interface_for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
@@ -229,17 +230,12 @@ def reads_slip(law, comps) -> bool:
     return bool(getattr(law, "reads_slip", True)) or (2 in comps and bool(getattr(law, "contact", False)))
 
 
-def _cell_area_and_width(grid):
-    """Area of a cell and width of the plane across the crack (1 in the plane problem)."""
-    return grid.dx1 * (grid.dx3 if not grid.plane else 1.0), (grid.L3 if not grid.plane else 1.0)
-
-
 def _crack_length(law, state, load, area, width, l0):
     """Mean crack length for constant-K loading (None when the load does not need it)."""
     if not load.constant_K:
         return None
     failed = law.failed(state)
-    length = float(np.count_nonzero(failed)) * area / width if failed is not None else None
+    length = failed_length(failed, area, width) if failed is not None else None
     return length or l0
 
 

@@ -283,7 +283,9 @@ def modal_run(mode, gamma, formulation, engine, T_end):
     return v / V0
 
 
-def _ref_basis(T, mode):
+def ref_basis(T, mode):
+    """Columns of the reference's long-time form of r(T) (the Rayleigh oscillation and the
+    T^-3/2, T^-5/2 tails at the two wave speeds), whose coefficients modal_reference fits."""
     from cracklab.analysis.exact import rayleigh_speed_ratio
     from cracklab.solver.kernels import wave_speed_ratio
 
@@ -326,7 +328,7 @@ def modal_reference(npts=20, jobs=2, period=50):
         sel = [i for i, (m, _) in enumerate(tasks) if m == mode]
         T = np.array([tasks[i][1] for i in sel])
         y = np.array([vals[i] for i in sel])
-        A = _ref_basis(T, mode)
+        A = ref_basis(T, mode)
         coef, *_ = np.linalg.lstsq(A, y, rcond=None)
         out[mode] = dict(T=T.tolist(), r=y.tolist(), coef=coef.tolist(),
                          residual=float(np.max(np.abs(A @ coef - y))))
@@ -339,7 +341,7 @@ def modal_exact_window(mode, T, ref):
 
     if mode == "III":
         return j0(T)
-    return _ref_basis(T, mode) @ np.asarray(ref[mode]["coef"])
+    return ref_basis(T, mode) @ np.asarray(ref[mode]["coef"])
 
 
 def modal_error(T, r, mode, ref, period=50):

@@ -565,7 +565,7 @@ def compare_recordings(base, new, base_path=None, new_path=None, names=None, ver
     print(f"{'case':<{w0}}  {'array':<{w1}}  {'result':<{w2}}  difference", file=out)
     for r in rows:
         print(f"{r[0]:<{w0}}  {r[1]:<{w1}}  {r[2]:<{w2}}  {r[3]}".rstrip(), file=out)
-    for warning in _provenance_warnings(base, new):
+    for warning in provenance_warnings(base, new):
         print("note: " + warning, file=out)
     print(("IDENTICAL" if ok else "DIFFERENT") + f": {len(names)} cases, base "
           f"{(base.get('package') or {}).get('commit')}, new {(new.get('package') or {}).get('commit')}",
@@ -573,7 +573,9 @@ def compare_recordings(base, new, base_path=None, new_path=None, names=None, ver
     return ok
 
 
-def _provenance_warnings(base, new):
+def provenance_warnings(base, new) -> list:
+    """Notes on what besides the code differs between two recordings (host, environment,
+    library versions, the kernel-fit and FFTW-wisdom caches) and may explain a difference."""
     out = []
     eb, en = base.get("environment", {}), new.get("environment", {})
     if eb.get("host") != en.get("host"):

@@ -343,7 +343,7 @@ def test_kernel_tables_are_computed_once_per_process(monkeypatch):
     hits = tables.stats["hits"]
     cracklab.simulate(shear.replace(name="again"))
     assert tables.stats["computed"] == computed and tables.stats["hits"] >= hits + 2
-    assert tables.stats["bytes"] > 0 and all(not w.flags.writeable for w in tables._cache.values())
+    assert tables.stats["bytes"] > 0 and all(not w.flags.writeable for w in tables.cached_tables())
 
     # the cache is bounded by bytes: with a 0 MB bound nothing is kept
     monkeypatch.setenv("CRACKLAB_KERNEL_CACHE_MB", "0")

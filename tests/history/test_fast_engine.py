@@ -209,7 +209,7 @@ def test_memory_does_not_grow_with_the_step_count():
     assert e.n == 5000
     assert e.state_shapes() == shapes and e.nbytes == nbytes
     assert nbytes < 24 * (8 * 16 * e.pairs)  # a few P-sized complex arrays per mode
-    assert d._buf.nbytes > 24 * 16 * 200  # the direct engine's buffer grows with n
+    assert d.buffer_nbytes > 24 * 16 * 200  # the direct engine's buffer grows with n
 
 
 def test_registration_window_and_arguments():
@@ -278,9 +278,9 @@ def test_cache_round_trip_and_corruption(tmp_cache):
         assert np.array_equal(F.get_fit("III", NU, "velocity").lam, refit.lam)  # rewritten, valid
     # a readable file with wrong numbers is rejected by the spot check
     bad = fit.coef * 1.01
-    key = F._key("III", NU, "velocity", fit.T0, fit.tol)
-    F._store(files[0], key, F.ExpFit("III", NU, "velocity", fit.T0, fit.tol, fit.lam, bad, 0.0,
-                                     fit.k0, fit.orders))
+    key = F.cache_key("III", NU, "velocity", fit.T0, fit.tol)
+    F.store_cached(files[0], key, F.ExpFit("III", NU, "velocity", fit.T0, fit.tol, fit.lam, bad, 0.0,
+                                           fit.k0, fit.orders))
     F.clear_memory_cache()
     assert np.array_equal(F.get_fit("III", NU, "velocity").coef, fit.coef)
 
@@ -291,31 +291,31 @@ def test_the_cache_file_decides_the_fit(tmp_cache, tmp_path, monkeypatch):
     it holds in memory from another cache, and a fit computed while another process stored
     its own first is not written over it."""
     fit = F.get_fit("III", NU, "velocity")
-    key = F._key("III", NU, "velocity", fit.T0, fit.tol)
+    key = F.cache_key("III", NU, "velocity", fit.T0, fit.tol)
     other = F.ExpFit("III", NU, "velocity", fit.T0, fit.tol, fit.lam, fit.coef * (1 + 1e-13), fit.err,
                      fit.k0, fit.orders)  # as another process might have computed it
     monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "elsewhere"))
-    path = F._cache_path(key)
-    F._store(path, key, other)
+    path = F.cache_path(key)
+    F.store_cached(path, key, other)
     got = F.get_fit("III", NU, "velocity")  # the same fit in memory, from the first cache
     assert np.array_equal(got.coef, other.coef) and not np.array_equal(got.coef, fit.coef)
     # first stored wins: a later store without replace leaves the file alone
-    F._store(path, key, fit, replace=False)
-    assert np.array_equal(F._load(path, key, "III", NU, "velocity", fit.T0, fit.tol).coef, other.coef)
+    F.store_cached(path, key, fit, replace=False)
+    assert np.array_equal(F.load_cached(path, key, "III", NU, "velocity", fit.T0, fit.tol).coef, other.coef)
     assert not list(path.parent.glob("*.tmp"))
 
 
 def test_cache_concurrent_writers_and_unwritable_dir(tmp_cache, tmp_path, monkeypatch):
     fit = F.get_fit("III", NU, "displacement")
     path = next(tmp_cache.glob("expfit-*.npz"))
-    key = F._key("III", NU, "displacement", fit.T0, fit.tol)
+    key = F.cache_key("III", NU, "displacement", fit.T0, fit.tol)
     errors = []
 
     def writer():
         try:
             for _ in range(10):
-                F._store(path, key, fit)
-                loaded = F._load(path, key, "III", NU, "displacement", fit.T0, fit.tol)
+                F.store_cached(path, key, fit)
+                loaded = F.load_cached(path, key, "III", NU, "displacement", fit.T0, fit.tol)
                 assert loaded is not None
         except Exception as exc:  # pragma: no cover - reported below
             errors.append(exc)
@@ -389,7 +389,7 @@ def test_product_start_weight_against_the_exact_start_term(kernel):
     e = ExponentialEngine(kernel=kernel, gamma=gam, nu=NU, rule="product", formulation="velocity", lag=1,
                           nsteps=500)
     z0 = abs(float(K.Z(kernel, 0.0, NU)))
-    j0 = e._j0_u[np.searchsorted(e._ug, gam)]
+    j0 = e.j0
     worst_fit = 0.0
     for n in range(1, 401):
         got = e.start_weight(n)

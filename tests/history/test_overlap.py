@@ -21,7 +21,7 @@ def test_overlapped_sums_are_the_sums_of_push(launch_every):
     """Pushes with the advance on the worker (launched after every push, or only now and
     then: an advance never launched runs at the next push) give the same S_n, bit for bit,
     as the engine that advances in push; and the worker did the work."""
-    if X._backend_choice() != "numba":
+    if X.backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
     ref, ov = _engine(1), _engine(2)
     assert ov.overlap and not ref.overlap
@@ -33,7 +33,7 @@ def test_overlapped_sums_are_the_sums_of_push(launch_every):
         assert np.array_equal(a, b), n
         if n % launch_every == 0:
             ov.launch()
-            launched += ov._pending is not None
+            launched += ov.pending
     assert launched >= 120 // launch_every - 1
     # the state saved by either is the same (the worker's advance is finished first)
     sa, sb = ref.get_state(), ov.get_state()
@@ -47,21 +47,22 @@ def test_the_callers_share_of_the_advance_changes_no_number(share, monkeypatch):
     """With the caller taking the top of each eighth before it waits (``balance``, the
     displacement scheme), the sums are those of the engine that advances in push, to the
     bit, whatever the share."""
-    if X._backend_choice() != "numba":
+    if X.backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
-    monkeypatch.setattr(X.ExponentialEngine, "_rebalance", lambda self, *a: None)  # hold the share
+    monkeypatch.setattr(X.ExponentialEngine, "rebalance", lambda self, *a: None)  # hold the share
     ref, ov = _engine(1), _engine(2)
     assert ov.balance and not ref.balance
-    ov._share = share
+    ov.share = share
     rng = np.random.default_rng(6)
     split = 0
     for n in range(100):
         x = rng.standard_normal(ref.shape) + 1j * rng.standard_normal(ref.shape)
         assert np.array_equal(ref.push(x), ov.push(x)), n
         ov.launch()
-        lo, hi = ov._eighth(ov._cut[0])
-        split += ov._cut[1] < hi
-        assert hi - ov._cut[1] == int(share * (hi - lo))
+        step, cut = ov.cut
+        lo, hi = ov.eighth(step)
+        split += cut < hi
+        assert hi - cut == int(share * (hi - lo))
     assert (split > 50) == (share > 0)
 
 
@@ -72,17 +73,17 @@ def test_the_share_follows_the_imbalance():
     eng = _engine(2)
     if not eng.overlap:
         pytest.skip("the overlap is a feature of the numba backend")
-    eng._wtimes = (0.0, 1.0)               # 100 positions in 1 s
-    eng._rebalance(0.95, 100, 120)         # the caller waited 0.05 s: a quarter of it moves
-    assert eng._share == pytest.approx(0.25 * 0.05 / (0.01 * 120))
+    eng.worker_times = (0.0, 1.0)         # 100 positions in 1 s
+    eng.rebalance(0.95, 100, 120)         # the caller waited 0.05 s: a quarter of it moves
+    assert eng.share == pytest.approx(0.25 * 0.05 / (0.01 * 120))
     for _ in range(100):
-        eng._rebalance(0.0, 100, 120)      # waited 1 s: capped steps, then at most 1/2
-    assert eng._share == 0.5
-    eng._rebalance(1.5, 100, 120)          # the worker was done 0.5 s before
-    assert eng._share == pytest.approx(0.48)
+        eng.rebalance(0.0, 100, 120)      # waited 1 s: capped steps, then at most 1/2
+    assert eng.share == 0.5
+    eng.rebalance(1.5, 100, 120)          # the worker was done 0.5 s before
+    assert eng.share == pytest.approx(0.48)
     for _ in range(100):
-        eng._rebalance(2.0, 100, 120)
-    assert eng._share == 0.0
+        eng.rebalance(2.0, 100, 120)
+    assert eng.share == 0.0
     assert not _engine(2, formulation="velocity", lag=1).balance
 
 
@@ -91,7 +92,7 @@ def test_taps_ahead_is_a_matter_of_scheduling(threads):
     """The taps 1 <= j < 8 added with the advance (taps_ahead, the velocity-based schemes)
     or in push give the same S_n to rounding, with or without the worker; the default
     follows the formulation."""
-    if X._backend_choice() != "numba":
+    if X.backend_choice() != "numba":
         pytest.skip("taps_ahead is a feature of the numba backend")
     a, b = _engine(threads), _engine(threads)
     assert not a.taps_ahead and _engine(1, formulation="velocity", lag=1).taps_ahead
@@ -110,7 +111,7 @@ def test_start_weight_ahead_is_the_start_weight_asked_for():
     worker with overlap, in launch without), is the value the engine gives when asked
     without launching, to the bit, and the exact E_0(n) to the fit's accuracy; the array of
     one step is not overwritten while that step uses it."""
-    if X._backend_choice() != "numba":
+    if X.backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
     kw = dict(kernel="II", rule="product", formulation="velocity", lag=1)
     plain, ahead, serial = _engine(2, **kw), _engine(2, **kw), _engine(1, **kw)
@@ -126,41 +127,53 @@ def test_start_weight_ahead_is_the_start_weight_asked_for():
             e0 = eng.start_weight(n)
             keep = e0.copy()
             eng.launch()           # E_0(n + 1) is computed now (worker or here) ...
-            eng._join()
+            eng.wait()
             assert np.array_equal(e0, keep), n  # ... into the other buffer
             got.append(keep)
         assert np.array_equal(got[0], ref) and np.array_equal(got[1], ref), n
         if n in (5, 40, 149):
-            exact = X._exact_weights("II", gam, np.full(gam.shape, n), nu=0.25, rule="product",
-                                     formulation="velocity", part="start0").reshape(plain.shape)
+            exact = X.exact_weights("II", gam, np.full(gam.shape, n), nu=0.25, rule="product",
+                                    formulation="velocity", part="start0").reshape(plain.shape)
             assert np.max(np.abs(ref - exact)) <= 1e-4 * np.max(np.abs(exact)), n
 
 
 def test_a_worker_error_reaches_the_caller(monkeypatch):
-    """An error inside the worker's advance is raised by the next push, not lost."""
-    if X._backend_choice() != "numba":
+    """An error inside the worker's advance (the compiled loop blocked.advance) is raised by
+    the next push, not lost."""
+    if X.backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
+    from cracklab.history import blocked
+
     eng = _engine(2)
     x = np.ones(eng.shape, dtype=complex)
     eng.push(x)
 
-    def boom(self, n, threads, part=None):
+    def boom(n, *args):
         raise FloatingPointError(f"advance of step {n} failed")
 
-    monkeypatch.setattr(X.ExponentialEngine, "_advance", boom)
+    monkeypatch.setattr(blocked, "advance", boom)
     eng.launch()
     with pytest.raises(FloatingPointError, match="advance of step 1 failed"):
         eng.push(x)
 
 
-def test_worker_is_per_process(monkeypatch):
+def _worker_in_child(parents):
+    """In a forked child: (whether worker() is another executor than the parent's
+    (id ``parents``, whose thread does not exist here), what that executor computes)."""
+    other = X.worker()
+    return id(other) != parents, other.submit(lambda: 6 * 7).result(timeout=60)
+
+
+def test_worker_is_per_process():
     """A forked child does not reuse its parent's worker thread (it does not exist there)."""
-    first = X._worker()
-    assert X._worker() is first
-    monkeypatch.setattr(X, "_POOL", (-1, first))  # as seen from another process
-    other = X._worker()
-    assert other is not first
-    assert other.submit(lambda: 6 * 7).result() == 42
+    import multiprocessing
+
+    first = X.worker()
+    assert X.worker() is first
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        other_is_new, answer = pool.apply_async(_worker_in_child, (id(first),)).get(timeout=120)
+    assert other_is_new
+    assert answer == 42
 
 
 def _scenes():
@@ -187,7 +200,7 @@ def test_overlapped_runs_are_the_runs_without(case, monkeypatch):
     """Mode I (displacement scheme) and 3D shear (product scheme) with two engine threads:
     the run with the advance on the worker and the run with it in push agree to the bit,
     and a checkpoint taken from the one continues in the other."""
-    if X._backend_choice() != "numba":
+    if X.backend_choice() != "numba":
         pytest.skip("the overlap is a feature of the numba backend")
     from cracklab import simulate
     from cracklab.solver.stepper import Stepper
@@ -195,13 +208,13 @@ def test_overlapped_runs_are_the_runs_without(case, monkeypatch):
     sc = _scenes()[case]
     fields = list(sc.record.fields)
     submitted = []
-    real = X._worker
+    real = X.worker
 
     def counting():
         submitted.append(1)
         return real()
 
-    monkeypatch.setattr(X, "_worker", counting)
+    monkeypatch.setattr(X, "worker", counting)
     over = simulate(sc)
     assert len(submitted) > sc.nsteps  # every step (each channel) was advanced on the worker
     monkeypatch.setenv("CRACKLAB_OVERLAP", "0")

@@ -116,13 +116,13 @@ def test_notes_on_the_caches_the_recordings_saw():
                                                     "wisdom": {"fftw-wisdom-h.pickle": ["e1", "e2"]}}}
     grown = {"environment": {"host": "h"}, "cache": {"dir": "/c", "files": {"expfit-1.npz": "a"},
                                                      "wisdom": {"fftw-wisdom-h.pickle": ["e1", "e2", "e3"]}}}
-    assert hashes._provenance_warnings(base, grown) == []  # plans of new sizes only
+    assert hashes.provenance_warnings(base, grown) == []  # plans of new sizes only
     replanned = {"environment": {"host": "h"}, "cache": {"dir": "/c", "files": {"expfit-1.npz": "b"},
                                                          "wisdom": {"fftw-wisdom-h.pickle": ["e1", "e3"]}}}
-    notes = " ".join(hashes._provenance_warnings(base, replanned))
+    notes = " ".join(hashes.provenance_warnings(base, replanned))
     assert "kernel-fit cache files changed" in notes and "wisdom entries of the base are gone" in notes
     other = {"environment": {"host": "g"}, "cache": {"dir": "/d", "files": {}, "wisdom": {}}}
-    notes = " ".join(hashes._provenance_warnings(base, other))
+    notes = " ".join(hashes.provenance_warnings(base, other))
     assert "different hosts" in notes and "different caches" in notes
     data = b"x(fftw_codelet_n1_4 0 #x10bdd)\n  (fftw_rdft_rank0_register 3 #x1)y(fftw_codelet_n1_4 0 #x10bdd)"
     assert len(hashes.wisdom_entries(data)) == 2

@@ -138,7 +138,7 @@ def test_modal_error_mode_I_with_the_reference_fit():
     ref = {"I": {"coef": ref_coef.tolist()}}
     P = acc.rayleigh_period("I")
     T = np.arange(48 * P, 50 * P + 0.1, 0.1)
-    exact_long = acc._ref_basis(T, "I") @ ref_coef
+    exact_long = acc.ref_basis(T, "I") @ ref_coef
     assert acc.modal_error(T, exact_long, "I", ref) == 0.0
     from cracklab.analysis.modal import long_time_amplitude
 
