@@ -55,7 +55,7 @@ def run_part(n, nsteps, every, fields, checkpoint_every, rss_every=100):
     cpu = np.zeros(nsteps + 1)
     rss = []
     ckpts = []
-    real_call, real_ckpt = sim._Recorder.__call__, sim._Recorder.checkpoint
+    real_call, real_ckpt = sim.Recorder.__call__, sim.Recorder.checkpoint
 
     def call(self, state):
         real_call(self, state)
@@ -70,7 +70,7 @@ def run_part(n, nsteps, every, fields, checkpoint_every, rss_every=100):
         ckpts.append({"step": k, "seconds": took, "mb": size / 2**20})
         return took
 
-    sim._Recorder.__call__, sim._Recorder.checkpoint = call, ckpt
+    sim.Recorder.__call__, sim.Recorder.checkpoint = call, ckpt
     tmp = Path(tempfile.mkdtemp(prefix="cracklab-soak-"))
     try:
         t0 = time.perf_counter()

@@ -34,7 +34,7 @@ GROUP = "_checkpoint"
 FILE = "state.npz"
 # test hook only: seconds to sleep inside a checkpoint write, with the new file written
 # but not yet moved into place (lets a test SIGKILL the run in the middle of a write)
-_SLEEP_ENV = "CRACKLAB_TEST_CHECKPOINT_SLEEP"
+SLEEP_ENV = "CRACKLAB_TEST_CHECKPOINT_SLEEP"
 
 
 # ----------------------------------------------------------------------------- encoding
@@ -82,7 +82,7 @@ def _decode(obj, arrays):
 
 
 def _sleep_hook():
-    delay = os.environ.get(_SLEEP_ENV)
+    delay = os.environ.get(SLEEP_ENV)
     if delay:
         time.sleep(float(delay))
 

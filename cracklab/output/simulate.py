@@ -45,7 +45,7 @@ def _field(state, name):
     return {"delta": state.delta, "v": state.v, "tau": state.tau}[kind][int(c)]
 
 
-class _Recorder:
+class Recorder:
     """Collects snapshots, station series and rupture times; streams to Zarr if asked.
 
     A store run creates the store first at its final size (coordinates, snapshot variables
@@ -325,7 +325,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     path = checkpoint.local_path(store) if store is not None else None
     if resume and path is None:
         raise InputError("resume", "needs a store path (a local Zarr directory) to resume from")
-    rec = _Recorder(scene, store, path)
+    rec = Recorder(scene, store, path)
     start, last = None, -1
     if path is not None:
         if resume:

@@ -24,9 +24,25 @@ operations in the same order, no fast-math).
 """
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 _JIT = {}
+
+
+@contextlib.contextmanager
+def python_only():
+    """Within the block, every step runs the numpy expressions instead of the compiled loops
+    (to check that the two give the same numbers)."""
+    saved = dict(_JIT)
+    _JIT.clear()
+    _JIT.update({name: None for name in _PY})
+    try:
+        yield
+    finally:
+        _JIT.clear()
+        _JIT.update(saved)
 
 
 def _compiled(name):

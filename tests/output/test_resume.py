@@ -128,8 +128,8 @@ def test_resume_checks_the_scene_and_the_arguments(tmp_path):
 def test_checkpoints_by_wall_time(tmp_path, monkeypatch):
     scene = _ellipse(t_end=0.4)
     seen = []
-    real = SIM._Recorder.checkpoint
-    monkeypatch.setattr(SIM._Recorder, "checkpoint", lambda self, st, n: seen.append(n) or real(self, st, n))
+    real = SIM.Recorder.checkpoint
+    monkeypatch.setattr(SIM.Recorder, "checkpoint", lambda self, st, n: seen.append(n) or real(self, st, n))
     cracklab.simulate(scene, store=tmp_path / "a.zarr", checkpoint_every="1e-9s")
     assert seen == list(range(scene.nsteps))      # every step (but the last) is due
     seen.clear()
@@ -231,7 +231,7 @@ def test_sigkill_inside_a_checkpoint_write(long_run, tmp_path):
     there leaves the previous checkpoint (and snapshots flushed past it) and resumes."""
     scene, toml, ref = long_run
     out = tmp_path / "out.zarr"
-    proc = _start(toml, out, "--checkpoint-every", "150", env={ck._SLEEP_ENV: "1.5"})
+    proc = _start(toml, out, "--checkpoint-every", "150", env={ck.SLEEP_ENV: "1.5"})
     tmp = out / ck.GROUP
     ok = _wait(proc, lambda: (tmp / ck.FILE).exists() and any(tmp.glob("*.tmp")))
     assert ok, proc.communicate()[1].decode()[-2000:]

@@ -141,7 +141,7 @@ def disk_fills_at_step(monkeypatch):
     import zarr.storage._local as local
 
     armed = {"step": None, "now": -1}
-    real_put, real_call = local._put, SIM._Recorder.__call__
+    real_put, real_call = local._put, SIM.Recorder.__call__
 
     def put(path, value, exclusive=False):
         if armed["step"] is not None and armed["now"] >= armed["step"]:
@@ -153,7 +153,7 @@ def disk_fills_at_step(monkeypatch):
         real_call(self, state)
 
     monkeypatch.setattr(local, "_put", put)
-    monkeypatch.setattr(SIM._Recorder, "__call__", call)
+    monkeypatch.setattr(SIM.Recorder, "__call__", call)
     return armed
 
 

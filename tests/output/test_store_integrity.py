@@ -245,7 +245,7 @@ from cracklab import cli
 S = importlib.import_module("cracklab.output.simulate")
 
 state = {"armed": False, "n": 0}
-real_finish, real_put = S._Recorder.finish, local._put
+real_finish, real_put = S.Recorder.finish, local._put
 after = int(os.environ["KILL_AFTER"])
 
 def finish(self, *a, **k):
@@ -259,7 +259,7 @@ def put(path, value, exclusive=False):
             os.kill(os.getpid(), signal.SIGKILL)      # kill -9 in the middle of the final write
     return real_put(path, value, exclusive)
 
-S._Recorder.finish, local._put = finish, put
+S.Recorder.finish, local._put = finish, put
 sys.argv = ["cracklab"] + sys.argv[1:]
 cli.main()
 """
@@ -314,7 +314,7 @@ def test_a_full_disk_during_the_final_write_leaves_a_store_not_complete(tmp_path
 
     real = local._put
     state = {"finishing": False, "n": 0}
-    real_finish = SIM._Recorder.finish
+    real_finish = SIM.Recorder.finish
 
     def finish(self, *a, **k):
         state["finishing"] = True
@@ -328,7 +328,7 @@ def test_a_full_disk_during_the_final_write_leaves_a_store_not_complete(tmp_path
         return real(path, value, exclusive)
 
     store = tmp_path / "run.zarr"
-    monkeypatch.setattr(SIM._Recorder, "finish", finish)
+    monkeypatch.setattr(SIM.Recorder, "finish", finish)
     monkeypatch.setattr(local, "_put", put)
     with pytest.raises(StoreError, match="no space left on device while writing the station series"):
         cracklab.simulate(_scene(), store=store, checkpoint_every=10)
@@ -462,7 +462,7 @@ def test_a_member_being_rewritten_is_read_whole_by_readers(ens_store, ensemble_r
     listed = [s["id"] for s in E.member_status(ens_store) if s["complete"]]
     old = ensemble_ref[1]
     seen = []
-    real_flush = SIM._Recorder.flush
+    real_flush = SIM.Recorder.flush
 
     def flush(self):
         real_flush(self)
@@ -476,7 +476,7 @@ def test_a_member_being_rewritten_is_read_whole_by_readers(ens_store, ensemble_r
             assert list(ens.member.values) == listed and np.isfinite(ens["delta_2"].values).all()
             seen.append(self.nsnap)
 
-    monkeypatch.setattr(SIM._Recorder, "flush", flush)
+    monkeypatch.setattr(SIM.Recorder, "flush", flush)
     res = _sweep(ens_store, resume=False)
     assert res.ok and len(res.ran) == 3 and seen
     assert not [p for p in (ens_store / "members").iterdir() if p.name.startswith(".")]   # no leftovers
