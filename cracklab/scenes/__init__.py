@@ -85,8 +85,12 @@ def tpv3_station_name(strike: int, dip: int) -> str:
     return f"faultst{fmt(strike)}dp{fmt(dip)}"
 
 
+# (strike, dip) offsets from the hypocentre in units of 100 m. faultst075dp000 and
+# faultst000dp-030 (3.0 km along dip) are the MDSBI reference's two records
+# (shared/reference/tpv3_mdsbi/README.md); the problem is symmetric along dip, so
+# faultst000dp030 carries the same series as faultst000dp-030.
 TPV3_STATIONS = [(s, 0) for s in (-120, -75, -45, 0, 45, 75, 120)] + \
-    [(0, d) for d in (-75, -45, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
+    [(0, d) for d in (-75, -45, -30, 30, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
 
 
 def _tpv3_cell_fraction(x, dx, half_width):
@@ -99,8 +103,9 @@ def _tpv3_cell_fraction(x, dx, half_width):
 def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
     """SCEC TPV3 (see shared/reference/tpv3_mdsbi/README.md): 30 km x 15 km fault
     centred in a periodic domain, slip-weakening friction, bonded outside the fault;
-    SI units. Records the SCEC on-fault stations and the rupture time (slip rate
-    above 1 mm/s).
+    SI units. Records the SCEC on-fault stations, among them the reference's
+    faultst075dp000 (7.5 km along strike) and faultst000dp-030 (3.0 km along dip), and
+    the rupture time (slip rate above 1 mm/s).
 
     The square nucleation patch and the fault edge are put on the grid as MDSBI does
     with its 'box' asperities (the reference code): each node stands for the cell

@@ -140,3 +140,104 @@ def test_coarse_tpv3_rupture_time():
     t = st.t.values
     v = st.v_1.sel(station="faultst075dp000").values
     assert abs(C.rupture_time(t, v) - 2.99) < 0.3
+
+
+# ---------------------------------------------------------------------------- the acceptance check
+def _reference_as_sim(station, *, shift=0.0, slip_scale=1.0, rate_scale=1.0):
+    """A 'simulation' that is the MDSBI record itself, on a finer time step, shifted in
+    time and with its slip and slip rate scaled: the known perturbation of a real series."""
+    ref = C.load_reference(station)
+    t = np.arange(0.0, 12.0 + 5e-4, 1e-3)
+    slip = slip_scale * np.interp(t - shift, ref["t"], ref["h_slip"], left=0.0)
+    rate = rate_scale * np.interp(t - shift, ref["t"], ref["h_rate"], left=0.0)
+    stress = np.interp(t - shift, ref["t"], ref["h_stress"], left=ref["h_stress"][0])
+    return {"t": t, "slip": slip, "rate": rate, "stress": stress}
+
+
+def _cmp(station, **perturb):
+    ref = C.load_reference(station)
+    return C.compare_station(_reference_as_sim(station, **perturb),
+                             {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"],
+                              "stress": ref["h_stress"]})
+
+
+def test_acceptance_passes_on_the_reference_and_fails_on_perturbed_series():
+    run = _load("run")
+    assert run.REF_STATIONS == ("faultst075dp000", "faultst000dp-030")
+    same = {s: {"100": _cmp(s)} for s in run.REF_STATIONS}
+    ok = C.check_acceptance(same)
+    assert ok["pass"] and ok["checked"] and not ok["failures"] and len(ok["checks"]) == 6
+    # each criterion fails alone, at either station
+    for perturb, quantity in (({"shift": 0.06}, "rupture_time"), ({"slip_scale": 1.04}, "final_slip"),
+                              ({"rate_scale": 1.2}, "peak_rate")):
+        for s in run.REF_STATIONS:
+            bad = {**same, s: {"100": _cmp(s, **perturb)}}
+            verdict = C.check_acceptance(bad)
+            assert not verdict["pass"], (perturb, s)
+            failed = [(r["station"], r["quantity"]) for r in verdict["checks"] if not r["pass"]]
+            assert failed == [(s, quantity)], (perturb, failed)
+            assert len(verdict["failures"]) == 1 and s in verdict["failures"][0]
+    # within the limits: a 0.03 s lag, 2 % slip, 10 % peak rate pass
+    near = {s: {"100": _cmp(s, shift=0.03, slip_scale=1.02, rate_scale=1.1)} for s in run.REF_STATIONS}
+    assert C.check_acceptance(near)["pass"]
+    # a station that never ruptures fails (NaN rupture time)
+    flat = {**same, "faultst075dp000": {"100": _cmp("faultst075dp000", shift=20.0)}}
+    assert not C.check_acceptance(flat)["pass"]
+
+
+def test_acceptance_at_50_m_needs_differences_no_larger_than_at_100_m():
+    s = "faultst075dp000"
+    at100 = _cmp(s, shift=0.03, slip_scale=1.02, rate_scale=1.05)
+    shrink = C.check_acceptance({s: {100.0: at100, 50.0: _cmp(s, shift=0.01, slip_scale=1.01, rate_scale=1.02)}})
+    assert shrink["pass"]
+    same = C.check_acceptance({s: {100.0: at100, 50.0: _cmp(s, shift=0.03, slip_scale=1.02, rate_scale=1.05)}})
+    assert same["pass"]                                    # equal differences are not larger
+    grow = C.check_acceptance({s: {100.0: at100, 50.0: _cmp(s, shift=0.04, slip_scale=1.01, rate_scale=1.02)}})
+    assert not grow["pass"]
+    assert [(r["dx"], r["quantity"]) for r in grow["checks"] if not r["pass"]] == [(50.0, "rupture_time")]
+    # larger than at 100 m but inside the tolerance still fails: the differences must not grow
+    peak = C.check_acceptance({s: {100.0: at100, 50.0: _cmp(s, shift=0.01, slip_scale=1.01, rate_scale=1.08)}})
+    assert [(r["dx"], r["quantity"]) for r in peak["checks"] if not r["pass"]] == [(50.0, "peak_rate")]
+    # a 50 m run alone cannot be checked against the 100 m differences; 600 m is not checked at all
+    alone = C.check_acceptance({s: {50.0: at100}})
+    assert not alone["pass"] and not alone["checked"]
+    coarse = C.check_acceptance({s: {600.0: _cmp(s, shift=0.5)}})
+    assert not coarse["checked"] and coarse["checks"] == []
+
+
+def test_study_reports_fail_and_exits_nonzero_on_a_perturbed_run():
+    """The study's own path from station series to verdict (run.compare_run on a stations
+    Dataset, the acceptance, the page's verdict line, the exit status), fed the reference
+    records with one of them perturbed."""
+    import xarray as xr
+
+    run = _load("run")
+
+    def dataset(**perturb):
+        names = ["faultst000dp000", "faultst075dp000", "faultst000dp-030", "faultst000dp030"]
+        pos = {"faultst000dp000": (0.0, 0.0), "faultst075dp000": (7500.0, 0.0),
+               "faultst000dp-030": (0.0, -3000.0), "faultst000dp030": (0.0, 3000.0)}
+        series = {n: _reference_as_sim("faultst000dp-030" if "dp-030" in n or "dp030" in n
+                                       else "faultst075dp000") for n in names}
+        series["faultst075dp000"] = _reference_as_sim("faultst075dp000", **perturb)
+        t = series["faultst000dp000"]["t"]
+        stack = lambda k: np.stack([series[n][k] for n in names])  # noqa: E731
+        return xr.Dataset({"delta_1": (("station", "t"), stack("slip")), "v_1": (("station", "t"), stack("rate")),
+                           "tau_1": (("station", "t"), 1e6 * stack("stress")),
+                           "v_3": (("station", "t"), np.zeros((len(names), t.size)))},
+                          coords={"station": names, "t": t, "x1": ("station", [pos[n][0] for n in names]),
+                                  "x3": ("station", [pos[n][1] for n in names])})
+
+    refs = {s: C.load_reference(s) for s in run.REF_STATIONS}
+    for perturb, expect in (({}, 0), ({"shift": 0.1}, 1)):
+        cmp = run.compare_run(dataset(**perturb), refs)
+        assert cmp["faultst000dp-030"]["offset_km"] == pytest.approx([0.0, -3.0])
+        assert cmp["faultst000dp-030"]["mirror"]["max_rate_diff"] == 0.0
+        res = {"runs": {"100": {}}, "stations": {s: {"100": c} for s, c in cmp.items()}}
+        res["acceptance"] = C.check_acceptance(res["stations"])
+        assert run.exit_status(res) == expect
+        line = run.verdict_lines(res, [100.0])
+        assert line.startswith("**Acceptance: FAIL**" if expect else "**Acceptance: PASS**")
+        assert ("FAIL" in line) == bool(expect)
+        if expect:
+            assert "faultst075dp000 at 100 m: rupture time" in line
