@@ -221,9 +221,14 @@ def pretaps(n, W, R, F):
     k = n & 7
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
-            F[k, m] += (W[1, m] * R[(k + 7) & 7, m] + W[2, m] * R[(k + 6) & 7, m] + W[3, m] * R[(k + 5) & 7, m]
-                        + W[4, m] * R[(k + 4) & 7, m] + W[5, m] * R[(k + 3) & 7, m] + W[6, m] * R[(k + 2) & 7, m]
-                        + W[7, m] * R[(k + 1) & 7, m])
+            x1 = R[(k + 7) & 7, m]; x2 = R[(k + 6) & 7, m]; x3 = R[(k + 5) & 7, m]; x4 = R[(k + 4) & 7, m]
+            x5 = R[(k + 3) & 7, m]; x6 = R[(k + 2) & 7, m]; x7 = R[(k + 1) & 7, m]
+            sr = (W[1, m] * x1.real + W[2, m] * x2.real + W[3, m] * x3.real + W[4, m] * x4.real
+                  + W[5, m] * x5.real + W[6, m] * x6.real + W[7, m] * x7.real)
+            si = (W[1, m] * x1.imag + W[2, m] * x2.imag + W[3, m] * x3.imag + W[4, m] * x4.imag
+                  + W[5, m] * x5.imag + W[6, m] * x6.imag + W[7, m] * x7.imag)
+            f = F[k, m]
+            F[k, m] = complex(f.real + sr, f.imag + si)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
@@ -243,12 +248,20 @@ def taps(x, n, W, R, F, out, scale, scaled, ahead):
     for c in numba.prange(64):
         for m in range(c * M // 64, (c + 1) * M // 64):
             v = x[m]
+            f = F[k0, m]
             if ahead:
-                acc = F[k0, m] + W[0, m] * v
+                ar = f.real + W[0, m] * v.real
+                ai = f.imag + W[0, m] * v.imag
             else:
-                acc = (F[k0, m] + W[0, m] * v + W[1, m] * R[k1, m] + W[2, m] * R[k2, m] + W[3, m] * R[k3, m]
-                       + W[4, m] * R[k4, m] + W[5, m] * R[k5, m] + W[6, m] * R[k6, m] + W[7, m] * R[k7, m])
+                x1 = R[k1, m]; x2 = R[k2, m]; x3 = R[k3, m]; x4 = R[k4, m]
+                x5 = R[k5, m]; x6 = R[k6, m]; x7 = R[k7, m]
+                ar = (f.real + W[0, m] * v.real + W[1, m] * x1.real + W[2, m] * x2.real + W[3, m] * x3.real
+                      + W[4, m] * x4.real + W[5, m] * x5.real + W[6, m] * x6.real + W[7, m] * x7.real)
+                ai = (f.imag + W[0, m] * v.imag + W[1, m] * x1.imag + W[2, m] * x2.imag + W[3, m] * x3.imag
+                      + W[4, m] * x4.imag + W[5, m] * x5.imag + W[6, m] * x6.imag + W[7, m] * x7.imag)
             R[k0, m] = v
             if scaled:
-                acc *= scale[m]
-            out[m] = acc
+                sc = scale[m]
+                ar *= sc
+                ai *= sc
+            out[m] = complex(ar, ai)
