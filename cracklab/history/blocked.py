@@ -209,7 +209,8 @@ def advance(n, lo, hi, lstart, jd, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
                         kr += wl[w0 + j] * L[b0 + k]
                         ki += wl[w0 + j] * L[b0 + J + k]
                         k = k - 1 if k > 0 else J - 1
-                    F[(n + r) & 7, m] += complex(kr, ki)
+                    f = F[(n + r) & 7, m]
+                    F[(n + r) & 7, m] = complex(f.real + kr, f.imag + ki)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
