@@ -261,6 +261,9 @@ def prepare_resume(path, t_all) -> None:
     for sub in Path(path).iterdir():       # by name: their metadata may be what a kill damaged
         if sub.is_dir() and is_final_array(sub.name):
             shutil.rmtree(sub)
+    # zarr's temporary files of a write the kill interrupted, before zarr lists the hierarchy
+    for tmp in Path(path).rglob("*.partial"):
+        tmp.unlink(missing_ok=True)
     g = zarr.open_group(str(path), mode="a")
     for name, arr, dims in _t_arrays(g):
         if dims and dims[0] == "t":
@@ -268,8 +271,6 @@ def prepare_resume(path, t_all) -> None:
                 arr.resize((len(t_all),) + tuple(arr.shape[1:]))
                 if name == "t":
                     arr[:] = t_all
-    for tmp in Path(path).rglob("*.partial"):
-        tmp.unlink(missing_ok=True)
     for tmp in (Path(path) / GROUP).glob("*.tmp"):
         tmp.unlink(missing_ok=True)
 
