@@ -401,7 +401,7 @@ class RateState(Friction):
         grid = scene.grid
         shape = grid.shape
         tau0 = {c: np.broadcast_to(np.asarray(v, dtype=float), shape)
-                for c, v in scene.loading.at(0.0, (1, 2, 3)).items()}
+                for c, v in scene.loading.at(0.0, (1, 2, 3), grid=grid).items()}
         T = np.sqrt(tau0[1] ** 2 + tau0[3] ** 2)
         sigma = np.broadcast_to(np.maximum(0.0, -tau0[2]) if self.follows_normal else
                                 np.asarray(self.sigma_n, dtype=float), shape)

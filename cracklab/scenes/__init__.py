@@ -132,6 +132,22 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
 
 
+# ---------------------------------------------------------------------------- SCEC TPV101-104
+def taper(x, W, w):
+    """The tanh transition of SCEC TPV101-104, B(x; W, w): 1 for |x| <= W,
+    0.5 [1 + tanh(w / (|x| - W - w) + w / (|x| - W))] for W < |x| < W + w, 0 beyond (smooth:
+    every derivative vanishes at |x| = W and W + w). ``x`` a number or an array."""
+    W = check_positive("W", W, allow_zero=True)
+    w = check_positive("w", w)
+    x = np.abs(np.asarray(x, dtype=float))
+    B = np.where(x <= W, 1.0, 0.0)
+    mid = (x > W) & (x < W + w)
+    r = x[mid]
+    with np.errstate(over="ignore"):
+        B[mid] = 0.5 * (1.0 + np.tanh(w / (r - W - w) + w / (r - W)))
+    return B if B.ndim else float(B)
+
+
 # ---------------------------------------------------------------------------- section 4: crack growth
 def cohesive_zone_size(material, tau_c, delta_c):
     """Static size of the cohesive zone of the linear cohesive law in mode I,
