@@ -41,10 +41,14 @@ EVOLUTIONS = ("ageing", "slip")
 AGEING, SLIP, STRONG = 0, 1, 2          # evolution laws of the compiled pass
 INITIAL, PREDICT, CORRECT, FULL = 0, 1, 2, 3   # what a solve does with the state
 LN2 = math.log(2.0)
-SIXTH, TWENTYFOURTH = 1.0 / 6.0, 1.0 / 24.0
-#: Newton: a step shorter than this (in ln V) ends the iteration (|G''| <= |G'| in x: the
-#: error left is below step^2 / 2 = 5e-15 relative in V); bisection stops at a bracket this narrow
-STEP_TOL = 1e-7
+THIRD, SIXTH, TWENTYFOURTH = 1.0 / 3.0, 1.0 / 6.0, 1.0 / 24.0
+#: Newton: it stops when the error left after the step, below w step^2 with w = G''/G' <= 1
+#: in x (for a step at most 1e-2 long), or below step^2 / 2, is under tol^2: STEP_TOL leaves
+#: 1e-10 relative in V (a traction residual below 1e-10 (eta V + sigma a)); a prediction of V
+#: (whose error reaches the step's result only times dt: through K V and the state's mean V)
+#: stops at PREDICT_TOL (1e-8 relative); bisection stops at a bracket BRACKET_TOL narrow
+STEP_TOL = 1e-5
+PREDICT_TOL = 1e-4
 BRACKET_TOL = 1e-13
 MAX_ITERATIONS = 200
 
@@ -79,14 +83,15 @@ def _bounds(T, A, eta, lnc):
     return min(xhi - LN2, _lnsinh(0.5 * T / A) - lnc), xhi
 
 
-def _newton(T, A, eta, lnc, x0, V0):
+def _newton(T, A, eta, lnc, x0, V0, tol):
     """V >= 0 with G = T - eta V - A asinh(c V) = 0, c = exp(lnc), from the guess x0 = ln V0
-    (NaN or -inf: none); returns (V, ln V, evaluations), evaluations < 0 when it failed
-    (bad input).
+    (NaN or -inf: none), to a last step below ``tol`` in ln V; returns (V, ln V, evaluations),
+    evaluations < 0 when it failed (bad input).
 
     Newton on x = ln V, safeguarded: each evaluation narrows the bracket [xlo, xhi] (G > 0
-    left of the root), intersected with its analytic bounds (:func:`_bounds`) unless the
-    guess converges at once, and a step that leaves it is replaced by bisection."""
+    left of the root), intersected with its analytic bounds (:func:`_bounds`) from the
+    first step longer than 0.5 (or without a guess), and a step that leaves it is replaced
+    by bisection."""
     if T == 0.0:
         return 0.0, -math.inf, 0
     if not (T > 0.0 and A >= 0.0 and eta > 0.0 and lnc == lnc):
@@ -113,35 +118,46 @@ def _newton(T, A, eta, lnc, x0, V0):
         else:
             return V, x, it
         damping = eta * V
-        step = G / (damping + A * d)      # the Newton step in x, -G / G'(x)
-        if abs(step) < STEP_TOL:          # converged (the root lies within the step)
-            return V * (1.0 + step * (1.0 + 0.5 * step)), x + step, it
+        inverse = 1.0 / (damping + A * d)
+        step = G * inverse                # the Newton step in x, -G / G'(x)
+        # w = G''/G' in x, the part of G' that is linear in V (the damping, and friction where
+        # u << 1, asinh(u) ~ u); the rest, friction where u >> 1 (asinh(u) ~ ln 2u), is linear
+        # in x. Every derivative of G in x is within a few w |G'|, so the Newton step in x
+        # leaves an error of about w step^2 / 2 (below w step^2 for |step| < 0.5)
+        w = (damping + A * d * q) * inverse
+        a_step = abs(step)
+        if a_step < tol or (a_step < 1e-2 and w * step * step < tol * tol):   # converged
+            if a_step < 1e-3:             # V e^step, the series to step^5 / 120 < 1e-17
+                return V * (1.0 + step * (1.0 + step * (0.5 + step * (SIXTH + step * TWENTYFOURTH)))), x + step, it
+            return math.exp(x + step), x + step, it
         # G is concave in x and convex in V: the Newton step in x ends beyond the root, the
-        # one in V (x + ln(1 + step)) before it. Weigh them by the part of G' that is linear
-        # in V (the damping, and friction where u << 1, asinh(u) ~ u); the rest, friction
-        # where u >> 1 (asinh(u) ~ ln 2u), is linear in x
+        # one in V (x + ln(1 + step)) before it. Weigh them by w
         xn = x + step
         if step > -1.0:
-            w = (damping + A * d * q) / (damping + A * d)
             if abs(step) < 1e-2:
-                xn += w * step * step * (step / 3.0 - 0.5)     # w (ln(1 + step) - step)
+                xn += w * step * step * (step * THIRD - 0.5)     # w (ln(1 + step) - step)
             else:
                 xn += w * (math.log1p(step) - step)
-        if not bounded:
+        if not bounded and not (abs(xn - x) < 0.5 and xlo < xn < xhi):   # a long step: bound it
             lo, hi = _bounds(T, A, eta, lnc)
             xlo, xhi, bounded = max(xlo, lo), min(xhi, hi), True
         if not (xlo < xn < xhi):          # outside the bracket: bisect
             xn = 0.5 * (xlo + xhi)
             if xhi - xlo < BRACKET_TOL:
                 return math.exp(xn), xn, it
+        dx = xn - x
         x = xn
-        V = math.exp(x)
+        if abs(dx) < 1e-3:                # exp(x + dx) = V e^dx, the series to dx^5 / 120 < 1e-17
+            V = V * (1.0 + dx * (1.0 + dx * (0.5 + dx * (SIXTH + dx * TWENTYFOURTH))))
+        else:
+            V = math.exp(x)
     return V, x, -MAX_ITERATIONS
 
 
-def _evolve(law, z, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
-    """(z, psi) after dt at the constant slip rate V >= 0 (exact) from z: for the ageing law
-    z = exp((psi - f0) / b) = V0 theta / L, for the slip laws z = psi; ia = 1 / a,
+def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
+    """(z, psi) after dt at the constant slip rate V >= 0 (exact) from z (and psi of z, for the
+    ageing law): for the ageing law z = exp((psi - f0) / b) = V0 theta / L, for the slip laws
+    z = psi (and ``psi`` is not read); ia = 1 / a,
     dtL = dt / L, q = V0 dt / L, ln2v0 = ln(2 V0), lnV = ln V (NaN: not known)."""
     s = V * dtL
     if law == AGEING:
@@ -152,8 +168,11 @@ def _evolve(law, z, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
         else:
             e = math.exp(-s)
             phi = -math.expm1(-s) / s
-        z = z * e + q * phi
-        return z, f0 + b * math.log(z)
+        zn = z * e + q * phi
+        r = (e - 1.0) + q * phi / z       # z' / z - 1
+        if abs(r) < 1e-4:                 # psi' = psi + b ln(1 + r), the series to r^4 / 4
+            return zn, psi + b * r * (1.0 - r * (0.5 - r * THIRD))
+        return zn, f0 + b * math.log(zn)
     if s < 1e-17:       # psi - psi_ss is below 1e3: the change is below its last bit
         return z, z
     em = s * (1.0 - s * (0.5 - s * SIXTH)) if s < 1e-4 else -math.expm1(-s)   # 1 - e^-s
@@ -214,7 +233,7 @@ def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, d
             z[i] = math.exp((p - fi) / bi) if law == AGEING else p
         if has_bonded and bonded[i]:
             if mode == CORRECT or mode == FULL:
-                zn, p = _evolve(law, z_old[i], 0.0, -math.inf, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+                zn, p = _evolve(law, z_old[i], psi[i], 0.0, -math.inf, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
                 z[i] = zn
                 psi[i] = p
             V[i] = 0.0
@@ -226,22 +245,23 @@ def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, d
             o3[i] = x3
             continue
         if mode == INITIAL:
-            W, x, it = _newton(T, A, eta, p * iai - l2, x0, vi)
+            W, x, it = _newton(T, A, eta, p * iai - l2, x0, vi, STEP_TOL)
         elif mode == CORRECT:
             Vp = V[i]
-            zn, p = _evolve(law, z_old[i], 0.5 * (V_old[i] + Vp), math.nan, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
-            W, x, it = _newton(T, A, eta, p * iai - l2, lnV[i], Vp)
+            zn, p = _evolve(law, z_old[i], psi[i], 0.5 * (V_old[i] + Vp), math.nan, ai, iai, bi, dLi, qi, l2, fi,
+                            fwi, Vwi)
+            W, x, it = _newton(T, A, eta, p * iai - l2, lnV[i], Vp, STEP_TOL)
         else:
             Vo = V_old[i]
             xo = lnV[i]
-            zn, p = _evolve(law, z_old[i], Vo, xo, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
-            W, x, it = _newton(T, A, eta, p * iai - l2, xo, Vo)
+            zn, p = _evolve(law, z_old[i], psi[i], Vo, xo, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+            W, x, it = _newton(T, A, eta, p * iai - l2, xo, Vo, PREDICT_TOL)
             if mode == FULL and it >= 0:
                 total += it
                 solves += 1
                 most = max(most, it)
-                zn, p = _evolve(law, z_old[i], 0.5 * (Vo + W), math.nan, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
-                W, x, it = _newton(T, A, eta, p * iai - l2, x, W)
+                zn, p = _evolve(law, z_old[i], psi[i], 0.5 * (Vo + W), math.nan, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+                W, x, it = _newton(T, A, eta, p * iai - l2, x, W, STEP_TOL)
         if it < 0 or not (W >= 0.0 and W < math.inf and abs(p) < math.inf):
             if bad < 0:
                 bad = i
@@ -281,8 +301,8 @@ def _kernel():
         else:
             jit = numba.njit(cache=True, nogil=True, error_model="numpy")
             g = globals()
-            for name in _HELPERS:           # the pass calls them by their global names
-                g[name] = jit(g[name])
+            for name in _HELPERS:           # the pass calls them by their global names, inlined
+                g[name] = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(g[name])
             _KERNEL.append(jit(_slide_loop))
     return _KERNEL[0]
 

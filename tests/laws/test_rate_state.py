@@ -102,10 +102,12 @@ def test_psi_is_recorded_by_name_with_its_unit():
 
 
 # ---------------------------------------------------------------------------- step (v)
-def test_newton_converges_from_1e_20_to_1e2_over_the_tpv_ranges_from_any_guess():
+@pytest.mark.parametrize("tol, accuracy", [(rs.STEP_TOL, 1e-10), (1e-7, 1e-12)])
+def test_newton_converges_from_1e_20_to_1e2_over_the_tpv_ranges_from_any_guess(tol, accuracy):
     """|tau*| - eta V = sigma a asinh[V / (2 V0) exp(psi / a)] for V from 1e-20 to 1e2 m/s, a over
     TPV101-104's 0.008-0.02, psi from 0.1 to 1.2, sigma 120 MPa (and 1 kPa, 0), guesses from
-    none and 1e-25 to 1e5 m/s: V to 1e-12 relative, never negative or NaN, at most 12 evaluations."""
+    none and 1e-25 to 1e5 m/s: V to 1e-10 relative at the run's tolerance (1e-12 at tol 1e-7),
+    never negative or NaN, at most 12 evaluations."""
     rs._kernel()
     worst, most = 0.0, 0
     for a, psi, sigma, V in itertools.product([0.008, 0.01, 0.016, 0.02], [0.1, 0.3, 0.5, 0.7, 0.9, 1.2],
@@ -114,11 +116,11 @@ def test_newton_converges_from_1e_20_to_1e2_over_the_tpv_ranges_from_any_guess()
         T = TPV_ETA * V + sigma * coefficient(V, psi, a, 1e-6)
         for guess in [math.nan, 1e-25, 1e-20, V * 1e-6, V, V * 1e6, 1e2, 1e5, 0.0]:
             x0 = math.log(guess) if guess > 0 else (-math.inf if guess == 0 else math.nan)
-            W, x, it = rs._newton(T, sigma * a, TPV_ETA, lnc, x0, guess)
+            W, x, it = rs._newton(T, sigma * a, TPV_ETA, lnc, x0, guess, tol)
             assert 0 <= it <= 12 and W > 0 and math.isfinite(W), (a, psi, sigma, V, guess, W, it)
             assert abs(math.exp(x) / W - 1) < 1e-14
             worst, most = max(worst, abs(W / V - 1)), max(most, it)
-    assert worst < 1e-12 and most <= 12
+    assert worst < accuracy and most <= 12
 
 
 def test_newton_takes_one_evaluation_from_a_guess_that_is_already_the_root():
@@ -126,7 +128,7 @@ def test_newton_takes_one_evaluation_from_a_guess_that_is_already_the_root():
     lnc = 0.7 / 0.01 - math.log(2e-6)
     for V in (1e-16, 1e-3, 3.0):
         T = TPV_ETA * V + 120e6 * coefficient(V, 0.7, 0.01, 1e-6)
-        assert rs._newton(T, 120e6 * 0.01, TPV_ETA, lnc, math.log(V * (1 + 1e-9)), V * (1 + 1e-9))[2] == 1
+        assert rs._newton(T, 120e6 * 0.01, TPV_ETA, lnc, math.log(V * (1 + 1e-9)), V * (1 + 1e-9), rs.STEP_TOL)[2] == 1
 
 
 def tpv_points(shape=(12, 10)):
@@ -152,12 +154,14 @@ def test_step_v_solves_the_balance_at_every_point_along_the_traction():
     v, tau = law.solve(state, {c: x.copy() for c, x in tau_star.items()}, None, {1: TPV_ETA, 3: TPV_ETA}, 1e-3,
                        law.strength(state, 0.0, grid))
     speed = np.hypot(v[1], v[3])
-    np.testing.assert_allclose(speed, V, rtol=1e-12)
+    np.testing.assert_allclose(speed, V, rtol=1e-10)
     np.testing.assert_allclose(v[1] * tau_star[3] - v[3] * tau_star[1], 0.0, atol=1e-12 * speed.max() * T.max())
     for c in (1, 3):
         np.testing.assert_array_equal(tau[c], tau_star[c] - TPV_ETA * v[c])
     np.testing.assert_allclose(np.hypot(tau[1], tau[3]), state["strength"], rtol=1e-12)
-    np.testing.assert_allclose(state["strength"], 120e6 * rs.friction_coefficient(speed, psi, a, 1e-6), rtol=1e-12)
+    # the traction balance to 1e-10 (eta V + sigma a) at every point
+    residual = np.abs(state["strength"] - 120e6 * rs.friction_coefficient(speed, psi, a, 1e-6))
+    assert np.all(residual <= 1e-10 * (TPV_ETA * speed + 120e6 * a))
 
 
 def test_zero_traction_gives_zero_slip_rate_and_bonded_points_stay():
@@ -241,7 +245,7 @@ def test_the_state_update_is_exact_at_constant_slip_rate(evolution):
                 psiss = a * math.log(2 * V0 / V * math.sinh(fss / a))
                 want = psiss + (psi - psiss) * math.exp(-s)
             z = psi
-        zn, got = rs._evolve(law, z, V, math.nan, a, 1 / a, b, dt / L, V0 * dt / L, math.log(2 * V0), f0, fw, Vw)
+        zn, got = rs._evolve(law, z, psi, V, math.nan, a, 1 / a, b, dt / L, V0 * dt / L, math.log(2 * V0), f0, fw, Vw)
         assert abs(got - want) <= 1e-13 * max(1.0, abs(want)), (psi, V, dt, got, want)
         assert math.isfinite(got)
 
