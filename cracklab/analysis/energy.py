@@ -267,7 +267,7 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
         if failed is not None:
             length = failed_length(failed, area, width) or l0
         return {c: np.broadcast_to(np.asarray(v, dtype=float), grid.shape)
-                for c, v in load.at(t[k], comps, length).items()}
+                for c, v in load.at(t[k], comps, length, grid).items()}
 
     W = np.zeros(nt)
     D = np.zeros(nt)

@@ -257,7 +257,8 @@ def verify(store, quick) -> None:
 @main.command()
 @click.option("--n1", type=int, default=256, show_default=True)
 @click.option("--n3", type=int, default=256, show_default=True)
-@click.option("--mode", type=click.Choice(["I", "II", "III", "shear"]), default="I", show_default=True)
+@click.option("--mode", type=click.Choice(["I", "II", "III", "shear"]), default=None,
+              help="Fracture mode of the load  [default: I, shear with a friction --law]")
 @click.option("--steps", "nsteps", type=int, default=200, show_default=True)
 @click.option("--engine", default="exponential", show_default=True)
 @click.option("--threads", type=int, default=1, show_default=True,
@@ -270,21 +271,31 @@ def verify(store, quick) -> None:
 @click.option("--fit-steps", type=click.IntRange(min=1), default=None,
               help="Fit the kernels for this many steps instead of the run's length (the exponential "
                    "engine's terms then do not depend on --steps).")
+@click.option("--law", type=click.Choice(["traction_free", "slip_weakening", "rate_state"]), default="traction_free",
+              show_default=True,
+              help="traction_free: a random load on a traction-free plane; slip_weakening: a TPV3-like rupture; "
+                   "rate_state: a TPV101-like rupture (ageing law, forced nucleation), which reports its Newton "
+                   "evaluations and solves per point and step; the friction benches are shear ruptures on 100 m "
+                   "cells with the same time-step rule.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from ..errors import InputError
 
+    if mode is None:
+        mode = "I" if law == "traction_free" else "shear"
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
-                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps)
+                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps, law=law)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:
         click.echo(json.dumps(result))
     else:
         for k, v in result.items():
+            if k.startswith("newton") and v is None:
+                continue
             click.echo(f"{k:>22}: {v:.4g}" if isinstance(v, float) else f"{k:>22}: {v}")
 
 

@@ -1,4 +1,10 @@
-"""`cracklab bench`: cost per step of the time loop, against a same-process FFT baseline."""
+"""`cracklab bench`: cost per step of the time loop, against a same-process FFT baseline.
+
+``law``: "traction_free" (the default: a traction-free plane under a random load),
+"slip_weakening" (a TPV3-like rupture: slip weakening, 120 MPa, a 3 km overstressed
+patch) or "rate_state" (a TPV101-like rupture: the ageing law, V_ini 1e-12 m/s, the
+forced nucleation) on a plane of 100 m cells, both along x1 (x3 for mode III), with the
+same time-step rule; the rate-and-state bench reports its Newton evaluations."""
 from __future__ import annotations
 
 import resource
@@ -7,7 +13,7 @@ import time
 import numpy as np
 
 from ..model.grid import Grid
-from ..laws import TractionFree
+from ..laws import RateState, SlipWeakening, TractionFree
 from ..model.loading import Loading
 from ..model.material import Material
 from ..model.record import Record
@@ -16,23 +22,56 @@ from ..model.scene import Numerics, Scene
 from ..solver.spectral import Transforms, backend_name
 from ..solver.stability import beta_max
 from ..solver.stepper import Stepper
+from ..errors import InputError
 
 MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
+LAWS = ("traction_free", "slip_weakening", "rate_state")
 
 
-def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None):
-    """A traction-free plane under a random load on the components of ``mode``."""
-    grid = Grid(n1=n1, n3=n3, L1=1.0, L3=n3 / n1 if n3 > 1 else 1.0)
-    rng = np.random.default_rng(0)
-    load = {f"tau0_{c}": rng.standard_normal(grid.shape) for c in MODES[mode]}
-    comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
+def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None, law="traction_free"):
+    """A traction-free plane under a random load on the components of ``mode``; or, with
+    ``law`` "slip_weakening" or "rate_state", a rupture on a plane of 100 m cells (module
+    docstring), loaded along x1 (x3 for mode III)."""
+    if law not in LAWS:
+        raise InputError("law", f"must be one of {', '.join(LAWS)}, got {law!r}")
+    if law != "traction_free" and mode == "I":
+        raise InputError("mode", f"the {law} bench is a shear rupture: mode II, III or shear, got I")
     numerics = Numerics(engine=engine, fft_threads=int(threads),
                         engine_threads=None if engine_threads is None else int(engine_threads))
+    if law == "traction_free":
+        grid = Grid(n1=n1, n3=n3, L1=1.0, L3=n3 / n1 if n3 > 1 else 1.0)
+        rng = np.random.default_rng(0)
+        load = {f"tau0_{c}": rng.standard_normal(grid.shape) for c in MODES[mode]}
+        comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
+        beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps, nu=0.25)
+        dt = beta * grid.dx_min
+        return Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=grid, law=TractionFree(),
+                     loading=Loading(**load), t_end=nsteps * dt * (1 - 1e-9), beta=beta,
+                     record=Record(fields=()), numerics=numerics, name="bench")
+    dx = 100.0
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx if n3 > 1 else 1.0)
+    mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
+    c = 3 if mode == "III" else 1
+    comps = (1, 3) if n3 > 1 else (c,)
     beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps, nu=0.25)
-    dt = beta * grid.dx_min
-    return Scene(material=Material(mu=1.0, cs=1.0, nu=0.25), grid=grid, law=TractionFree(),
-                 loading=Loading(**load), t_end=nsteps * dt * (1 - 1e-9), beta=beta,
-                 record=Record(fields=()), numerics=numerics, name="bench")
+    xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
+    x1, x3 = np.meshgrid(grid.x1 - xc, grid.x3 - zc, indexing="ij")
+    if law == "slip_weakening":      # TPV3's friction and load, the whole plane a fault
+        patch = (np.abs(x1) <= 1500.0) & (np.abs(x3) <= 1500.0)
+        rule = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6)
+        load = Loading(**{f"tau0_{c}": np.where(patch, 81.6e6, 70.0e6)})
+    else:                            # TPV101's friction (the velocity-weakening box) and nucleation
+        from ..scenes import taper
+
+        box = taper(x1, 15000.0, 3000.0) * taper(x3, 7500.0, 3000.0)
+        rule = RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
+                         V_ini=1e-12)
+        load = Loading(**{f"tau0_{c}": 75e6, f"nucleation_dtau_{c}": 25e6}, nucleation_radius=3000.0,
+                       nucleation_time=1.0, nucleation_x1=float(xc), nucleation_x3=float(zc))
+    dt = beta * grid.dx_min / mat.cs
+    return Scene(material=mat, grid=grid, law=rule, loading=load, t_end=nsteps * dt * (1 - 1e-9), beta=beta,
+                 record=Record(fields=()), numerics=numerics, units={"length": "m", "time": "s", "stress": "Pa"},
+                 name=f"bench_{law}")
 
 
 class _Pair:
@@ -64,7 +103,8 @@ def fft_pair_ms(grid, repeats=50, threads=1):
 PAIR_EVERY = 10
 
 
-def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None):
+def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None,
+        law="traction_free"):
     """Time every step of a bench scene; the median over the second half is the figure.
 
     The FFT baseline is timed in the same stretch (a pair after every PAIR_EVERY-th timed
@@ -72,9 +112,11 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     cost at the baseline's rate) can be set against the step on the same host, same minute.
     ``fit_steps``: the exponential engine's kernel fits cover that many steps instead of the
     run's (runs of different lengths then carry the same terms: their costs compare the
-    history's length alone).
+    history's length alone). ``law``: the bench scene's law (:func:`bench_scene`); the
+    rate-and-state one reports the Newton evaluations and solves per point and step of the
+    second half and the most evaluations one solve took.
     """
-    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads)
+    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law)
     stepper = Stepper(scene, interface_for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
     response = stepper.response
     overlap = any(ch.engine.overlap for ch in response.channels.values())
@@ -86,12 +128,14 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         it = tqdm(it, total=scene.nsteps + 1, unit="step", desc="bench")
     half = (scene.nsteps + 1) // 2  # the second half is timed
     durations, pairs, counted, skip = [], [], 0, False
+    newton = (None, None)
     t0 = time.perf_counter()
     for n, _ in enumerate(it):
         durations.append(np.nan if skip else time.perf_counter() - t0)
         skip = False
         if n == half - 1:
             counted = response.fft.count
+            newton = _newton_counts(stepper.lstate)
         elif n >= half and (n - half) % PAIR_EVERY == PAIR_EVERY - 1:
             # the baseline in the same stretch of time as the steps it is compared with,
             # the engines' worker idle; the step after it (its advance done here) is not timed
@@ -101,11 +145,16 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         t0 = time.perf_counter()
     timed = np.asarray(durations[half:])
     transforms = (response.fft.count - counted) / max(1, timed.size)
+    evaluations, solves = (None, None)
+    if newton[0] is not None:
+        points_steps = max(1, timed.size) * n1 * n3
+        end = _newton_counts(stepper.lstate)
+        evaluations, solves = ((end[i] - newton[i]) / points_steps for i in (0, 1))
     timed = timed[np.isfinite(timed)]
     ms = 1e3 * float(np.median(timed))
     pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads)
     return {
-        "n1": n1, "n3": n3, "mode": mode, "steps": scene.nsteps + 1, "engine": engine,
+        "n1": n1, "n3": n3, "mode": mode, "law": law, "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (n1 * n3),
         "threads": int(threads), "engine_threads": scene.numerics.history_threads,
@@ -118,4 +167,12 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "terms": {name: getattr(ch.engine, "pairs", None) for name, ch in response.channels.items()},
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "newton_evaluations_per_point_step": evaluations,
+        "newton_solves_per_point_step": solves,
+        "newton_most_evaluations": stepper.lstate.get("newton_most") if evaluations is not None else None,
     }
+
+
+def _newton_counts(state):
+    """(Newton evaluations, Newton solves) of a rate-and-state law's state so far, (None, None) for other laws."""
+    return (state["newton_evaluations"], state["newton_solves"]) if "newton_solves" in state else (None, None)

@@ -14,7 +14,8 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
   (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
   ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
   strength depends on v) and ``applied_strength`` (the strength it applied) have
-  defaults; a friction law derives from :class:`cracklab.laws.friction.Friction` and
+  defaults, and so has ``check_scene(scene)`` (checks against the load and material when
+  the Scene is built); a friction law derives from :class:`cracklab.laws.friction.Friction` and
   writes its ``coefficient`` instead of ``strength``;
 * the energy budget's part (:mod:`cracklab.analysis.energy`), which rebuilds the state
   from the recorded slip: ``energy_state(grid)`` (the rebuilt state at t = 0; None: the
@@ -129,6 +130,10 @@ class Law:
         """The strength step (v) applied (what the recorder records as ``strength``),
         from ``strength`` (of :meth:`strength`) and the traction ``tau`` of the step."""
         return strength
+
+    def check_scene(self, scene) -> None:
+        """Checks of the law against the rest of its scene (its load, material, grid), made
+        when the Scene is built: raise an InputError naming the field. None by default."""
 
     #: components the scene must load for the law to work (a friction law that follows
     #: the normal traction needs the normal component)

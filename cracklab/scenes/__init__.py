@@ -1,13 +1,14 @@
 """Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
-the plane test problems used in verification, and the crack-growth problems of
-section 4 (a row of tough asperities, random toughness; see docs/scenes.md)."""
+SCEC TPV101 and TPV103 (rate-and-state friction), the plane test problems used in
+verification, and the crack-growth problems of section 4 (a row of tough asperities,
+random toughness; see docs/scenes.md)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import InputError, check_positive
 from ..model.grid import Grid
-from ..laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree
+from ..laws import LinearCohesive, PrescribedRupture, RateState, SlipWeakening, TractionFree
 from ..model.loading import Loading, point_load
 from ..model.material import Material
 from ..model.record import Record
@@ -20,7 +21,7 @@ UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 # these functions of this module, by name. No other name of the module (a helper, or
 # ``np`` imported above) is reachable from a study; further builders are registered
 # explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
-BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "asperity_row",
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv103", "asperity_row",
             "random_toughness")
 
 
@@ -135,6 +136,81 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                  beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
+
+
+# ---------------------------------------------------------------------------- SCEC TPV101-104
+def taper(x, W, w):
+    """The tanh transition of SCEC TPV101-104, B(x; W, w): 1 for |x| <= W,
+    0.5 [1 + tanh(w / (|x| - W - w) + w / (|x| - W))] for W < |x| < W + w, 0 beyond (smooth:
+    every derivative vanishes at |x| = W and W + w). ``x`` a number or an array."""
+    W = check_positive("W", W, allow_zero=True)
+    w = check_positive("w", w)
+    x = np.abs(np.asarray(x, dtype=float))
+    B = np.where(x <= W, 1.0, 0.0)
+    mid = (x > W) & (x < W + w)
+    r = x[mid]
+    with np.errstate(over="ignore"):
+        B[mid] = 0.5 * (1.0 + np.tanh(w / (r - W - w) + w / (r - W)))
+    return B if B.ndim else float(B)
+
+
+#: SCEC's on-fault stations of TPV101-104: (along strike, depth below the top of the 15 km
+#: fault), in units of 100 m; the hypocentre is faultst000dp075
+TPV101_STATIONS = [(s, d) for d in (30, 75, 120) for s in ((-120, 0, 120) if d != 75 else (-90, 0, 90))]
+
+
+def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau0, dtau0):
+    """The geometry, load and records TPV101 and TPV103 share (whole space, periodic
+    ``domain`` with the hypocentre at its centre node). ``law`` maps the velocity-weakening
+    box B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) to the law."""
+    L1, L3 = domain
+    n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
+    mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)       # c_p = sqrt(3) c_s = 6000 m/s
+    xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
+    box = np.outer(taper(grid.x1 - xc, 15000.0, 3000.0), taper(grid.x3 - zc, 7500.0, 3000.0))
+    loading = Loading(tau0_1=tau0, nucleation_dtau_1=dtau0, nucleation_radius=3000.0, nucleation_time=1.0,
+                      nucleation_x1=float(xc), nucleation_x3=float(zc))
+    # dp: depth below the top of the fault, 7.5 km above the hypocentre (x3 grows with depth)
+    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * (d - 75)) for s, d in TPV101_STATIONS}
+    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
+    if beta is None:
+        beta = min(0.25, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
+    return Scene(material=mat, grid=grid, law=law(box), loading=loading, t_end=t_end, beta=beta,
+                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 units={"length": "m", "time": "s", "stress": "Pa"}, name=name)
+
+
+def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV101 (see shared/reference/tpv101_uguca/README.md): rate-and-state friction,
+    ageing law, in a whole space. a = 0.008 + 0.008 (1 - B(x; 15 km, 3 km) B(z; 7.5 km, 3 km))
+    (velocity weakening in the 30 km x 15 km box, strengthening outside), b 0.012, L 0.02 m,
+    V0 1e-6 m/s, f0 0.6, sigma_n 120 MPa; tau0 75 MPa along strike with V_ini = 1e-12 m/s
+    (the initial state slides at V_ini under it); nucleation 25 MPa F(r) G(t), R 3 km, T 1 s,
+    at the hypocentre, the centre node of the periodic ``domain`` (72 km x 36 km: uguca's).
+    SI units; records SCEC's on-fault stations (faultst000dp075 the hypocentre; dp the depth
+    below the top of the fault, x3 growing with depth) and the rupture time (slip rate above
+    1 mm/s). beta: at most 0.25."""
+    def law(box):
+        return RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
+                         V_ini=1e-12, evolution="ageing")
+
+    return _tpv_rate_state("tpv101", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=law, tau0=75e6, dtau0=25e6)
+
+
+def tpv103(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV103: rate-and-state friction, slip law with strong velocity weakening, in a
+    whole space; the geometry, stations and records of :func:`tpv101`. a = 0.01 + 0.01 (1 - B B),
+    b 0.014, L 0.4 m, f_w 0.2, V_w = 0.1 + 0.9 (1 - B B) m/s, V0 1e-6 m/s, f0 0.6, sigma_n
+    120 MPa; tau0 40 MPa with V_ini = 1e-16 m/s; nucleation 45 MPa F(r) G(t), R 3 km, T 1 s."""
+    def law(box):
+        outside = 1.0 - box
+        return RateState(a=0.01 + 0.01 * outside, b=0.014, L=0.4, V0=1e-6, f0=0.6, sigma_n=120e6, V_ini=1e-16,
+                         evolution="slip", f_w=0.2, V_w=0.1 + 0.9 * outside)
+
+    return _tpv_rate_state("tpv103", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=law, tau0=40e6, dtau0=45e6)
 
 
 # ---------------------------------------------------------------------------- section 4: crack growth

@@ -155,7 +155,7 @@ class Stepper:
                 # Loading.factor scales by sqrt(l0 / l): give it the initial length
                 self.load = dataclasses.replace(load, l0=self.l0)
         length = self.crack_length(lstate)
-        return length, law.strength(lstate, t, scene.grid), self.load.terms(t, self.comps, length)
+        return length, law.strength(lstate, t, scene.grid), self.load.terms(t, self.comps, length, scene.grid)
 
     def _check(self, n, t, v, g):
         """Stop on a non-finite velocity or on exponential growth, fast or slow (module constants)."""

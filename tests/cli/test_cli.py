@@ -2,6 +2,7 @@
 import json
 
 import numpy as np
+import pytest
 import xarray as xr
 from click.testing import CliRunner
 
@@ -108,3 +109,20 @@ def test_bench_fit_steps_fixes_the_terms():
     assert own["terms"]["I"] < short["terms"]["I"]
     res = CliRunner().invoke(main, ["bench", "--n1", "16", "--n3", "16", "--steps", "10", "--fit-steps", "0"])
     assert res.exit_code != 0 and "--fit-steps" in res.output
+
+
+@pytest.mark.parametrize("law", ["slip_weakening", "rate_state"])
+def test_bench_friction_laws(law):
+    """--law: a shear rupture on 100 m cells; the rate-and-state bench counts its Newton
+    evaluations (two solves per step: the product scheme's predictor and corrector)."""
+    res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "32", "--steps", "20", "--law", law, "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["law"] == law and out["mode"] == "shear" and out["ms_per_step"] > 0
+    if law == "rate_state":
+        assert out["newton_solves_per_point_step"] == 2.0
+        assert 2.0 <= out["newton_evaluations_per_point_step"] < 6 and out["newton_most_evaluations"] >= 1
+    else:
+        assert out["newton_evaluations_per_point_step"] is None
+    res = CliRunner().invoke(main, ["bench", "--n1", "16", "--n3", "16", "--steps", "10", "--law", law, "--mode", "I"])
+    assert res.exit_code != 0 and "mode: the" in res.output

@@ -41,7 +41,7 @@ class Product(Velocity):
             pstate = {k: (a.copy() if isinstance(a, np.ndarray) else a) for k, a in run.lstate.items()}
             law.update(pstate, trial, dt, v, t, tau)
             # tau* = tau0 + f (the law's solve adds the load; f: the response's work arrays)
-            terms = run.load.terms(t, comps, run.crack_length(pstate))
+            terms = run.load.terms(t, comps, run.crack_length(pstate), run.scene.grid)
             vp, _ = law.solve(pstate, f, trial, eta, dt, law.strength(pstate, t, run.scene.grid), terms,
                               traction=False)
             f = response.correct(vp)

@@ -1,0 +1,558 @@
+"""Rate-and-state friction (docs/equations.md, "Rate-and-state friction").
+
+The regularised form of Lapusta et al. (2000) and SCEC TPV101-104: the friction
+coefficient is f(V, psi) = a asinh[V / (2 V0) exp(psi / a)] and the strength f times the
+compressive normal stress (``sigma_n``, or the current normal traction without it, as
+every friction law: laws/friction.py). The state psi evolves by
+
+* the ageing law, dpsi/dt = (b V0 / L) [exp((f0 - psi) / b) - V / V0]
+  (psi = f0 + b ln(V0 theta / L), d theta / dt = 1 - V theta / L);
+* the slip law, dpsi/dt = -(V / L) [psi - psi_ss(V)], with psi_ss the state at which
+  f(V, psi_ss) = f_ss(V) = f0 - (b - a) ln(V / V0); with ``f_w`` and ``V_w`` (strong
+  velocity weakening, TPV103/104) f_ss = f_w + (f_LV - f_w) / [1 + (V / V_w)^8]^(1/8).
+
+Step (v): at each point, with tau* the traction if the plane stopped (load plus f_j),
+the slip rate is collinear with tau* and its magnitude V >= 0 solves
+|tau*| - eta V = sigma f(V, psi): a Newton iteration on ln V inside a bracket that every
+evaluation narrows (bisection where a step leaves it), in one compiled pass over the
+plane (:func:`_slide_loop`).
+
+State update (second order, exact when V is constant over the step): over a step psi
+is integrated exactly at a constant rate V*, the mean of V_{n-1} and the step's
+estimate of V_n. A step's first solve predicts V_n with V* = V_{n-1}, then corrects
+with the mean (two Newton solves); a later solve of the same step (the product
+scheme's corrector) reuses the last estimate (one more). A solve with
+``traction=False`` is the product scheme's predictor (solver/schemes/product.py): it
+only predicts, and the step's solve that follows corrects, two solves in all.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, SimulationError, check_fields_nesting
+from .base import SHEAR, bonded_mask, check_parameter, parameter
+from .friction import Friction
+from .solve import solve_velocity
+
+EVOLUTIONS = ("ageing", "slip")
+AGEING, SLIP, STRONG = 0, 1, 2          # evolution laws of the compiled pass
+INITIAL, PREDICT, CORRECT, FULL = 0, 1, 2, 3   # what a solve does with the state
+LN2 = math.log(2.0)
+THIRD, SIXTH, TWENTYFOURTH = 1.0 / 3.0, 1.0 / 6.0, 1.0 / 24.0
+#: Newton: it stops when the error left after the step, below w step^2 with w = G''/G' <= 1
+#: in x (for a step at most 1e-2 long), or below step^2 / 2, is under tol^2: STEP_TOL leaves
+#: 1e-10 relative in V (a traction residual below 1e-10 (eta V + sigma a)); a prediction of V
+#: (whose error reaches the step's result only times dt: through K V and the state's mean V)
+#: stops at PREDICT_TOL (1e-8 relative); bisection stops at a bracket BRACKET_TOL narrow
+STEP_TOL = 1e-5
+PREDICT_TOL = 1e-4
+BRACKET_TOL = 1e-13
+MAX_ITERATIONS = 200
+
+
+# ---------------------------------------------------------------------------- the compiled pass
+# Plain functions, compiled by numba on first use (_kernel); without numba the same
+# functions run as Python (slow, the same arithmetic).
+def _lnsinh(y):
+    """ln sinh(y) for y > 0, without overflow."""
+    if y > 20.0:
+        return y - LN2
+    if y < 1e-4:
+        return math.log(y) + y * y * SIXTH
+    return math.log(math.sinh(y))
+
+
+def _asinh_exp(lnu):
+    """(asinh(u), u / sqrt(1 + u^2), 1 / (1 + u^2)) for u = exp(lnu), without overflow."""
+    if lnu > 18.0:      # asinh(u) = ln(2u) + 1/(4u^2) - ...: the rest is below 1e-16 of it
+        return lnu + LN2, 1.0, 0.0
+    u = math.exp(lnu)
+    if lnu < -18.0:
+        return u, u, 1.0
+    q = 1.0 / (1.0 + u * u)
+    return math.asinh(u), u * math.sqrt(q), q
+
+
+def _bounds(T, A, eta, lnc):
+    """A bracket of the root of :func:`_newton`'s G: G(xhi) < 0 at V = T / eta, and G >= 0
+    where eta V <= T/2 and A asinh(cV) <= T/2."""
+    xhi = math.log(T / eta)
+    return min(xhi - LN2, _lnsinh(0.5 * T / A) - lnc), xhi
+
+
+def _newton(T, A, eta, lnc, x0, V0, tol):
+    """V >= 0 with G = T - eta V - A asinh(c V) = 0, c = exp(lnc), from the guess x0 = ln V0
+    (NaN or -inf: none), to a last step below ``tol`` in ln V; returns (V, ln V, evaluations),
+    evaluations < 0 when it failed (bad input).
+
+    Newton on x = ln V, safeguarded: each evaluation narrows the bracket [xlo, xhi] (G > 0
+    left of the root), intersected with its analytic bounds (:func:`_bounds`) from the
+    first step longer than 0.5 (or without a guess), and a step that leaves it is replaced
+    by bisection."""
+    if T == 0.0:
+        return 0.0, -math.inf, 0
+    if not (T > 0.0 and A >= 0.0 and eta > 0.0 and lnc == lnc):
+        return math.nan, math.nan, -1
+    if A == 0.0:
+        V = T / eta
+        return V, math.log(V), 0
+    x = x0
+    V = V0
+    bounded = not (-740.0 < x < 700.0)    # no guess, or one exp cannot take
+    if bounded:
+        xlo, xhi = _bounds(T, A, eta, lnc)
+        x = min(_lnsinh(T / A) - lnc, xhi)   # the root without damping, or T / eta
+        V = math.exp(x)
+    else:
+        xlo, xhi = -math.inf, math.inf
+    for it in range(1, MAX_ITERATIONS + 1):
+        f, d, q = _asinh_exp(lnc + x)
+        G = T - eta * V - A * f
+        if G > 0.0:
+            xlo = x
+        elif G < 0.0:
+            xhi = x
+        else:
+            return V, x, it
+        damping = eta * V
+        inverse = 1.0 / (damping + A * d)
+        step = G * inverse                # the Newton step in x, -G / G'(x)
+        # w = G''/G' in x, the part of G' that is linear in V (the damping, and friction where
+        # u << 1, asinh(u) ~ u); the rest, friction where u >> 1 (asinh(u) ~ ln 2u), is linear
+        # in x. Every derivative of G in x is within a few w |G'|, so the Newton step in x
+        # leaves an error of about w step^2 / 2 (below w step^2 for |step| < 0.5)
+        w = (damping + A * d * q) * inverse
+        a_step = abs(step)
+        if a_step < tol or (a_step < 1e-2 and w * step * step < tol * tol):   # converged
+            if a_step < 1e-3:             # V e^step, the series to step^5 / 120 < 1e-17
+                return V * (1.0 + step * (1.0 + step * (0.5 + step * (SIXTH + step * TWENTYFOURTH)))), x + step, it
+            return math.exp(x + step), x + step, it
+        # G is concave in x and convex in V: the Newton step in x ends beyond the root, the
+        # one in V (x + ln(1 + step)) before it. Weigh them by w
+        xn = x + step
+        if step > -1.0:
+            if abs(step) < 1e-2:
+                xn += w * step * step * (step * THIRD - 0.5)     # w (ln(1 + step) - step)
+            else:
+                xn += w * (math.log1p(step) - step)
+        if not bounded and not (abs(xn - x) < 0.5 and xlo < xn < xhi):   # a long step: bound it
+            lo, hi = _bounds(T, A, eta, lnc)
+            xlo, xhi, bounded = max(xlo, lo), min(xhi, hi), True
+        if not (xlo < xn < xhi):          # outside the bracket: bisect
+            xn = 0.5 * (xlo + xhi)
+            if xhi - xlo < BRACKET_TOL:
+                return math.exp(xn), xn, it
+        dx = xn - x
+        x = xn
+        if abs(dx) < 1e-3:                # exp(x + dx) = V e^dx, the series to dx^5 / 120 < 1e-17
+            V = V * (1.0 + dx * (1.0 + dx * (0.5 + dx * (SIXTH + dx * TWENTYFOURTH))))
+        else:
+            V = math.exp(x)
+    return V, x, -MAX_ITERATIONS
+
+
+def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
+    """(z, psi) after dt at the constant slip rate V >= 0 (exact) from z (and psi of z, for the
+    ageing law): for the ageing law z = exp((psi - f0) / b) = V0 theta / L, for the slip laws
+    z = psi (and ``psi`` is not read); ia = 1 / a,
+    dtL = dt / L, q = V0 dt / L, ln2v0 = ln(2 V0), lnV = ln V (NaN: not known)."""
+    s = V * dtL
+    if law == AGEING:
+        # theta' = theta e^-s + (L / V)(1 - e^-s), i.e. z' = z e^-s + q (1 - e^-s) / s
+        if s < 1e-4:    # the series, to s^4 / 24
+            e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH))
+            phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
+        else:
+            e = math.exp(-s)
+            phi = -math.expm1(-s) / s
+        zn = z * e + q * phi
+        r = (e - 1.0) + q * phi / z       # z' / z - 1
+        if abs(r) < 1e-4:                 # psi' = psi + b ln(1 + r), the series to r^4 / 4
+            return zn, psi + b * r * (1.0 - r * (0.5 - r * THIRD))
+        return zn, f0 + b * math.log(zn)
+    if s < 1e-17:       # psi - psi_ss is below 1e3: the change is below its last bit
+        return z, z
+    em = s * (1.0 - s * (0.5 - s * SIXTH)) if s < 1e-4 else -math.expm1(-s)   # 1 - e^-s
+    lnv = (lnV if lnV == lnV else math.log(V)) - ln2v0 + LN2                  # ln(V / V0)
+    fss = f0 - (b - a) * lnv
+    if law == STRONG:
+        r = V / Vw
+        r8 = r * r
+        r8 = r8 * r8
+        r8 = r8 * r8
+        if r8 > 1e-16:
+            fss = fw + (fss - fw) / (1.0 + r8) ** 0.125
+        else:
+            fss = fss - (fss - fw) * 0.125 * r8
+    y = fss * ia
+    if not (y > 1e-300):
+        y = 1e-300
+    psiss = a * (LN2 - lnv + _lnsinh(y))             # f(V, psiss) = fss
+    z = z - (z - psiss) * em
+    return z, z
+
+
+def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq, ln2v0, sln2v0,
+                f0, sf0,
+                fw, sfw, Vw, sVw, Vi, sVi, law, mode, from_v, eta, bonded, has_bonded,
+                z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3):
+    """Step (v) with the state update of ``mode`` at every point; returns (evaluations,
+    Newton solves, most evaluations of one solve, the first point that failed or -1)."""
+    total = 0
+    solves = 0
+    most = 0
+    bad = -1
+    for i in range(t1.size):
+        x1 = t1[i] + g * l1[i * sl1]
+        x3 = t3[i] + g * l3[i * sl3]
+        T = math.sqrt(x1 * x1 + x3 * x3)
+        ai = a[i * sa]
+        iai = ia[i * sia]
+        bi = b[i * sb]
+        dLi = dtL[i * sdtL]
+        qi = q[i * sq]
+        l2 = ln2v0[i * sln2v0]
+        fi = f0[i * sf0]
+        fwi = fw[i * sfw]
+        Vwi = Vw[i * sVw]
+        A = sig[i * ssig] * ai
+        zn = 0.0
+        if mode == INITIAL:
+            x0 = math.nan
+            vi = math.nan
+            if from_v:
+                vi = Vi[i * sVi]
+                x0 = math.log(vi)
+                y = (T - eta * vi) / A
+                # sigma f(V_ini, psi) = T - eta V_ini
+                psi[i] = ai * (l2 - x0 + _lnsinh(y)) if y > 0.0 else math.nan
+            p = psi[i]
+            z[i] = math.exp((p - fi) / bi) if law == AGEING else p
+        if has_bonded and bonded[i]:
+            if mode == CORRECT or mode == FULL:
+                zn, p = _evolve(law, z_old[i], psi[i], 0.0, -math.inf, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+                z[i] = zn
+                psi[i] = p
+            V[i] = 0.0
+            lnV[i] = -math.inf
+            strength[i] = T
+            v1[i] = 0.0
+            v3[i] = 0.0
+            o1[i] = x1
+            o3[i] = x3
+            continue
+        if mode == INITIAL:
+            W, x, it = _newton(T, A, eta, p * iai - l2, x0, vi, STEP_TOL)
+        elif mode == CORRECT:
+            Vp = V[i]
+            zn, p = _evolve(law, z_old[i], psi[i], 0.5 * (V_old[i] + Vp), math.nan, ai, iai, bi, dLi, qi, l2, fi,
+                            fwi, Vwi)
+            W, x, it = _newton(T, A, eta, p * iai - l2, lnV[i], Vp, STEP_TOL)
+        else:
+            Vo = V_old[i]
+            xo = lnV[i]
+            zn, p = _evolve(law, z_old[i], psi[i], Vo, xo, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+            W, x, it = _newton(T, A, eta, p * iai - l2, xo, Vo, PREDICT_TOL)
+            if mode == FULL and it >= 0:
+                total += it
+                solves += 1
+                most = max(most, it)
+                zn, p = _evolve(law, z_old[i], psi[i], 0.5 * (Vo + W), math.nan, ai, iai, bi, dLi, qi, l2, fi, fwi, Vwi)
+                W, x, it = _newton(T, A, eta, p * iai - l2, x, W, STEP_TOL)
+        if it < 0 or not (W >= 0.0 and W < math.inf and abs(p) < math.inf):
+            if bad < 0:
+                bad = i
+            W = math.nan
+        else:
+            total += it
+            solves += 1
+            most = max(most, it)
+        V[i] = W
+        lnV[i] = x
+        scale = W / T if T > 0.0 else 0.0
+        w1 = scale * x1
+        w3 = scale * x3
+        v1[i] = w1
+        v3[i] = w3
+        if mode != PREDICT:     # the prediction keeps only V (the corrector starts from it)
+            if mode != INITIAL:
+                z[i] = zn
+            psi[i] = p
+            strength[i] = T - eta * W
+            o1[i] = x1 - eta * w1
+            o3[i] = x3 - eta * w3
+    return total, solves, most, bad
+
+
+_HELPERS = ("_lnsinh", "_asinh_exp", "_bounds", "_newton", "_evolve")
+_KERNEL = []
+
+
+def _kernel():
+    """The compiled pass (numba, cached on disk; the Python functions without numba)."""
+    if not _KERNEL:
+        try:
+            import numba
+        except Exception:  # pragma: no cover
+            _KERNEL.append(_slide_loop)
+        else:
+            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+            g = globals()
+            for name in _HELPERS:           # the pass calls them by their global names, inlined
+                g[name] = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(g[name])
+            _KERNEL.append(jit(_slide_loop))
+    return _KERNEL[0]
+
+
+def _flat(value, shape):
+    """(flat float array, stride): one value (stride 0), or the field over ``shape``."""
+    arr = np.asarray(value, dtype=float)
+    if arr.size == 1:
+        return arr.reshape(1), 0
+    return np.ascontiguousarray(np.broadcast_to(arr, shape)).ravel(), 1
+
+
+def friction_coefficient(V, psi, a, V0):
+    """f(V, psi) = a asinh[V / (2 V0) exp(psi / a)] (numpy; overflow-free for large psi / a)."""
+    V, psi, a, V0 = (np.asarray(x, dtype=float) for x in (V, psi, a, V0))
+    lnu = np.log(np.maximum(V, np.finfo(float).tiny) / (2.0 * V0)) + psi / a
+    with np.errstate(over="ignore"):
+        f = np.where(lnu > 18.0, lnu + LN2, np.arcsinh(np.exp(np.minimum(lnu, 18.0))))
+    return a * np.where(V > 0, f, 0.0)
+
+
+@dataclass(frozen=True)
+class RateState(Friction):
+    """Regularised rate-and-state friction: f = a asinh[V / (2 V0)
+    exp(psi / a)], the ageing law or the slip law (``evolution``), strong velocity
+    weakening with ``f_w`` and ``V_w`` (slip law only). The initial state: ``psi_ini``,
+    or from the initial slip rate ``V_ini`` and the load at t = 0, sigma f(V_ini, psi) =
+    |tau0| - eta V_ini (both: they must agree). ``sigma_n`` compressive positive; None:
+    the current normal traction (laws/friction.py)."""
+
+    a: float | np.ndarray = parameter()
+    b: float | np.ndarray = parameter()
+    L: float | np.ndarray = parameter(unit="length")
+    V0: float | np.ndarray = parameter(unit="velocity")
+    f0: float | np.ndarray = parameter()
+    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
+    V_ini: float | np.ndarray | None = parameter(unit="velocity", default=None)
+    psi_ini: float | np.ndarray | None = parameter(default=None)
+    evolution: str = parameter(kind="option", default="ageing")
+    f_w: float | np.ndarray | None = parameter(default=None)
+    V_w: float | np.ndarray | None = parameter(unit="velocity", default=None)
+    bonded: np.ndarray | None = bonded_mask()
+    kind = "rate_state"
+    state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1")}
+
+    def __post_init__(self):
+        check_fields_nesting(self, "law")
+        for name in ("a", "b", "L", "V0"):
+            check_parameter(self, name)
+        _check_finite(self, "f0")
+        if self.sigma_n is not None:
+            check_parameter(self, "sigma_n", allow_equal=True)
+        if self.V_ini is None and self.psi_ini is None:
+            raise InputError("law.V_ini", "is required: the initial slip rate (> 0; the initial state then "
+                                          "follows from the load at t = 0), or give law.psi_ini, the initial state")
+        if self.V_ini is not None:
+            check_parameter(self, "V_ini")
+        if self.psi_ini is not None:
+            _check_finite(self, "psi_ini")
+        if not isinstance(self.evolution, str) or self.evolution not in EVOLUTIONS:
+            raise InputError("law.evolution", f"must be one of {', '.join(EVOLUTIONS)}, got {self.evolution!r}")
+        if (self.f_w is None) != (self.V_w is None):
+            given, missing = ("f_w", "V_w") if self.V_w is None else ("V_w", "f_w")
+            raise InputError(f"law.{missing}", f"must be given with law.{given} (strong velocity weakening needs both)")
+        if self.f_w is not None:
+            if self.evolution != "slip":
+                raise InputError("law.f_w", f"strong velocity weakening (f_w, V_w) goes with evolution = 'slip', "
+                                            f"got evolution = {self.evolution!r}")
+            check_parameter(self, "f_w")
+            check_parameter(self, "V_w")
+        object.__setattr__(self, "_cache", {})
+
+    # -- the protocol
+    def init_state(self, grid):
+        """psi (recorded), V and ln V, the strength; the evolution variable z with its value
+        at the last step (z = exp((psi - f0) / b) = V0 theta / L for the ageing law, psi
+        itself for the slip laws); the stage of the step and the Newton counts."""
+        shape = grid.shape
+        psi = np.full(shape, np.nan) if self.psi_ini is None else \
+            np.array(np.broadcast_to(np.asarray(self.psi_ini, dtype=float), shape))
+        state = {"psi": psi, "psi_old": psi.copy(), "V": np.zeros(shape), "V_old": np.zeros(shape),
+                 "lnV": np.full(shape, -np.inf), "strength": np.zeros(shape), "stage": INITIAL,
+                 "newton_evaluations": 0, "newton_solves": 0, "newton_most": 0, "spacing": [grid.dx1, grid.dx3]}
+        if self.evolution == "ageing":
+            del state["psi_old"]
+            state["z"], state["z_old"] = np.zeros(shape), np.zeros(shape)
+        return state
+
+    def _z(self, state):
+        """(z, z at the last step) of ``state``."""
+        return (state["z"], state["z_old"]) if "z" in state else (state["psi"], state["psi_old"])
+
+    def update(self, state, delta, dt, v_prev, t, tau_prev=None):
+        """A new step: the state and V of the last one start this one's state update (the
+        arrays swap: the step's solves write every point of z and V anew)."""
+        if v_prev is None:
+            state["stage"] = INITIAL
+            return
+        name = "z" if "z" in state else "psi"
+        state[name], state[f"{name}_old"] = state[f"{name}_old"], state[name]
+        state["V"], state["V_old"] = state["V_old"], state["V"]
+        state["stage"] = PREDICT
+
+    def strength(self, state, t, grid):
+        """The strength sigma f(V, psi) the step's solve finds (filled in by :meth:`solve`)."""
+        return state["strength"]
+
+    def applied_strength(self, strength, tau):
+        return strength
+
+    def check_scene(self, scene):
+        """The initial state from V_ini needs, at every point, a shear load at t = 0 above
+        eta V_ini under compression; given psi_ini too, the two must agree with it."""
+        if self.V_ini is None:
+            return
+        grid = scene.grid
+        shape = grid.shape
+        tau0 = {c: np.broadcast_to(np.asarray(v, dtype=float), shape)
+                for c, v in scene.loading.at(0.0, (1, 2, 3), grid=grid).items()}
+        T = np.sqrt(tau0[1] ** 2 + tau0[3] ** 2)
+        sigma = np.broadcast_to(np.maximum(0.0, -tau0[2]) if self.follows_normal else
+                                np.asarray(self.sigma_n, dtype=float), shape)
+        eta = scene.material.eta(1)
+        Vi = np.broadcast_to(np.asarray(self.V_ini, dtype=float), shape)
+        a = np.broadcast_to(np.asarray(self.a, dtype=float), shape)
+        free = np.ones(shape, bool) if self.bonded is None else ~np.asarray(self.bonded, dtype=bool)
+        ok = (T - eta * Vi > 0) & (sigma > 0)
+        if not np.all(ok | ~free):
+            i, k = np.argwhere(~ok & free)[0]
+            sig = "sigma_n" if not self.follows_normal else "-tau0_2"
+            raise InputError("law.V_ini", f"the initial state from V_ini needs, at every point, a shear load at t = 0 "
+                                          f"above eta V_ini and compression ({sig} > 0); at node ({i}, {k}), x1 = "
+                                          f"{grid.x1[i]:g}, x3 = {grid.x3[k]:g}: |tau0| = {T[i, k]:g}, eta V_ini = "
+                                          f"{eta * Vi[i, k]:g}, {sig} = {sigma[i, k]:g}")
+        if self.psi_ini is None:
+            return
+        psi = np.broadcast_to(np.asarray(self.psi_ini, dtype=float), shape)
+        carried = sigma * friction_coefficient(Vi, psi, a, np.broadcast_to(np.asarray(self.V0, float), shape))
+        wanted = T - eta * Vi
+        off = (np.abs(carried - wanted) > 1e-6 * np.abs(wanted)) & free
+        if np.any(off):
+            i, k = np.argwhere(off)[0]
+            raise InputError("law.psi_ini", f"is inconsistent with the initial stress: at node ({i}, {k}), x1 = "
+                                            f"{grid.x1[i]:g}, x3 = {grid.x3[k]:g}, sigma f(V_ini, psi_ini) = "
+                                            f"{carried[i, k]:.9g} but |tau0| - eta V_ini = {wanted[i, k]:.9g} (a "
+                                            f"relative difference above 1e-6); give law.V_ini or law.psi_ini alone")
+
+    def solve(self, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
+        """Step (v): the normal component first when the law follows it (friction.py), then
+        the shear components, V from |tau*| - eta V = sigma f(V, psi) with the state update
+        of the step (module docstring)."""
+        part = (lambda cs: None if load is None else (load[0], {c: load[1][c] for c in cs}))
+        shear = tuple(c for c in SHEAR if c in tau_star)
+        v, tau = {}, {}
+        if self.follows_normal and 2 in tau_star:
+            v, tau = solve_velocity(self, state, {2: tau_star[2]}, delta, eta, dt, 0.0, part((2,)), True)
+            sigma = np.maximum(0.0, -tau[2])
+        else:
+            sigma = self.sigma_n
+        stage = state["stage"]
+        mode = INITIAL if stage == INITIAL else CORRECT if stage == CORRECT else PREDICT if not traction else FULL
+        vs, ts = self._slide(state, {c: tau_star[c] for c in shear}, eta[shear[0]], dt, sigma, part(shear), mode)
+        if stage != INITIAL:
+            state["stage"] = CORRECT
+        v.update(vs)
+        v = {c: v[c] for c in sorted(v)}
+        if not traction:
+            return v, None
+        tau.update(ts)
+        return v, {c: tau[c] for c in v}
+
+    def _constants(self, shape, dt):
+        """The parameters as (flat array, stride) for the pass, with 1 / a, dt / L, V0 dt / L and ln(2 V0)."""
+        key = (shape, dt)
+        if key not in self._cache:
+            self._cache.clear()
+            V0, L = np.asarray(self.V0, dtype=float), np.asarray(self.L, dtype=float)
+            a = np.asarray(self.a, dtype=float)
+            self._cache[key] = (_flat(a, shape), _flat(1.0 / a, shape), _flat(self.b, shape), _flat(dt / L, shape),
+                                _flat(V0 * dt / L, shape), _flat(np.log(2.0 * V0), shape),
+                                _flat(self.f0, shape), _flat(0.0 if self.f_w is None else self.f_w, shape),
+                                _flat(1.0 if self.V_w is None else self.V_w, shape),
+                                _flat(1.0 if self.V_ini is None else self.V_ini, shape),
+                                (np.zeros(1, bool), False) if self.bonded is None else
+                                (np.ascontiguousarray(self.bonded, dtype=bool).ravel(), True))
+        return self._cache[key]
+
+    def _slide(self, state, tau_star, eta, dt, sigma, load, mode):
+        """The compiled pass over the shear components in ``tau_star``; returns (v, tau)."""
+        comps = tuple(tau_star)
+        shape = np.shape(tau_star[comps[0]])
+        zero = np.zeros(shape)
+        t1 = np.ascontiguousarray(tau_star.get(1, zero), dtype=float).ravel()
+        t3 = np.ascontiguousarray(tau_star.get(3, zero), dtype=float).ravel()
+        g, (l1, sl1), (l3, sl3) = 0.0, (np.zeros(1), 0), (np.zeros(1), 0)
+        if load is not None:
+            g = float(load[0])
+            l1, sl1 = _flat(load[1].get(1, 0.0), shape)
+            l3, sl3 = _flat(load[1].get(3, 0.0), shape)
+        a, ia, b, dtL, q, ln2v0, f0, fw, Vw, Vi, (bonded, has_bonded) = self._constants(shape, dt)
+        sig = _flat(sigma, shape)
+        law = AGEING if self.evolution == "ageing" else STRONG if self.f_w is not None else SLIP
+        z, z_old = self._z(state)
+        from_v = mode == INITIAL and self.psi_ini is None
+        if mode == PREDICT:     # only v, which the corrector reads: into the state's work arrays
+            if state.get("work") is None or state["work"][0].shape != shape:
+                state["work"] = [np.empty(shape), np.empty(shape)]
+            out = state["work"] * 2
+        else:
+            out = [np.empty(shape) for _ in range(4)]
+        total, solves, most, bad = _kernel()(
+            t1, t3, g, l1, sl1, l3, sl3, *sig, *a, *ia, *b, *dtL, *q, *ln2v0, *f0, *fw, *Vw, *Vi, law, mode,
+            from_v, float(eta), bonded, has_bonded, z_old.ravel(), state["V_old"].ravel(), z.ravel(),
+            state["psi"].ravel(), state["V"].ravel(), state["lnV"].ravel(), state["strength"].ravel(),
+            *(o.ravel() for o in out))
+        state["newton_evaluations"] += int(total)
+        state["newton_solves"] += int(solves)
+        state["newton_most"] = max(state["newton_most"], int(most))
+        if bad >= 0:
+            self._failed(state, bad, shape, t1, t3, g, l1, sl1, l3, sl3, sig, eta)
+        v1, v3, o1, o3 = out
+        v = {c: (v1 if c == 1 else v3) for c in comps}
+        return v, {c: (o1 if c == 1 else o3) for c in comps}
+
+    def _failed(self, state, i, shape, t1, t3, g, l1, sl1, l3, sl3, sig, eta):
+        node = tuple(int(n) for n in np.unravel_index(i, shape))
+        x1, x3 = node[0] * state["spacing"][0], node[1] * state["spacing"][1]
+        T = math.hypot(t1[i] + g * l1[i * sl1], t3[i] + g * l3[i * sl3])
+
+        def at(x):
+            x = np.asarray(x, dtype=float).ravel()
+            return float(x[i] if x.size > 1 else x[0])
+
+        raise SimulationError(
+            f"rate-and-state step (v) did not converge at node {node}, x1 = {x1:g}, x3 = {x3:g}: |tau*| = {T:.6g}, "
+            f"sigma = {at(sig[0]):.6g}, eta = {eta:.6g}, a = {at(self.a):.6g}, "
+            f"V0 = {at(self.V0):.6g}, psi = {at(state['psi']):.6g} (V = {at(state['V_old']):.6g} at the last "
+            f"step): no slip rate V >= 0 solves |tau*| - eta V = "
+            f"sigma f(V, psi); the run was stopped")
+
+
+def _check_finite(law, name):
+    value = getattr(law, name)
+    try:
+        arr = np.asarray(value, dtype=float)
+        bad = isinstance(value, (bool, np.bool_, str, bytes)) or not np.all(np.isfinite(arr))
+    except (TypeError, ValueError, OverflowError):
+        bad = True
+    if bad:
+        raise InputError(f"law.{name}", f"must be a finite number or an (n1, n3) field of them, got {value!r}"
+                         if np.ndim(value) == 0 else f"must be a finite number or an (n1, n3) field of them")
+    if np.ndim(value) == 0:
+        object.__setattr__(law, name, float(value))
