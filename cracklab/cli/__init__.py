@@ -270,15 +270,20 @@ def verify(store, quick) -> None:
 @click.option("--fit-steps", type=click.IntRange(min=1), default=None,
               help="Fit the kernels for this many steps instead of the run's length (the exponential "
                    "engine's terms then do not depend on --steps).")
+@click.option("--free-surface", is_flag=True,
+              help="The half plane of n1 x (n3 + 1) nodes below a free surface on x3 = 0 (mirror symmetry, "
+                   "Grid(free_surface=True)); to set against the periodic n1 x n3 grid and the doubled "
+                   "n1 x 2 n3 one (docs/performance.md, 'Free surface by mirror symmetry').")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, free_surface, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from ..errors import InputError
 
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
-                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps)
+                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps,
+                           free_surface=free_surface)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:
