@@ -168,16 +168,17 @@ class Transforms:
         return np.empty(shape, dtype=dtype)
 
     def _make_mirror_plans(self, flags):
-        """Free surface: the doubled cell's real 2D transforms, (n1, 2 n3) <-> (n1, n3 + 1)."""
+        """Free surface: the doubled cell's real 2D transforms, (n1, 2 n3) <-> (n1, n3 + 1), each
+        in place (its field a view into its spectrum's rows: fewer bytes in the caches); two
+        buffers, one each way, since the fused passes of loops.mirror_* read the forward
+        spectrum while they write the inverse one (in place, the possible aliasing keeps them
+        from vectorising)."""
         n1, m = self.shape
-        real, spec = (n1, 2 * (m - 1)), (n1, m)
         kw = dict(axes=(0, 1), threads=self.workers, flags=flags)
-        # one field for both ways (fewer bytes in the caches); two spectra, since the fused
-        # passes of loops.mirror_* read the one while writing the other (in place, the
-        # possible aliasing keeps them from vectorising)
-        z = pyfftw.empty_aligned(real, dtype="float64")
-        self._fd = pyfftw.FFTW(z, pyfftw.empty_aligned(spec, dtype="complex128"), **kw)
-        self._bd = pyfftw.FFTW(pyfftw.empty_aligned(spec, dtype="complex128"), z, direction="FFTW_BACKWARD", **kw)
+        fwd = pyfftw.empty_aligned((n1, m), dtype="complex128")
+        bwd = pyfftw.empty_aligned((n1, m), dtype="complex128")
+        self._fd = pyfftw.FFTW(fwd.view(np.float64)[:, :2 * (m - 1)], fwd, **kw)
+        self._bd = pyfftw.FFTW(bwd, bwd.view(np.float64)[:, :2 * (m - 1)], direction="FFTW_BACKWARD", **kw)
 
     # -- free surface ----------------------------------------------------------------
     def _doubled_forward(self, z):
