@@ -120,7 +120,7 @@ class Grid:
 
     @property
     def x3(self) -> np.ndarray:
-        """x3_k = k dx3: k < n3 on the periodic cell, k <= n3 (depth 0 to L3) with a free surface."""
+        """Node coordinates x3_k = k L3/n3: k = 0 .. n3 - 1, or k = 0 .. n3 (the depth) below a free surface."""
         return np.arange(self.shape[1]) * self.dx3
 
     @property
