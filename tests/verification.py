@@ -111,6 +111,18 @@ ROWS = [
      "Kostrov (1964) self-similar mode III crack, v = 0.9 c_s",
      "max relative error of the centre slip once the crack spans >= 40 cells (n = 256)",
      0.02),
+    ("mirror-shear",
+     "tests/solver/test_mirror.py::test_3d_shear_run_equals_the_doubled_whole_space_run",
+     "free surface by mirror symmetry: the doubled whole-space run (n1 x 2 n3) with mirrored loads and laws",
+     "max over the recorded fields and station series of max abs(half - doubled) / max abs(doubled); 3D shear, "
+     "slip weakening, product scheme, 32 x 16 half plane",
+     1e-12),
+    ("mirror-mode-I",
+     "tests/solver/test_mirror.py::test_mode_i_run_equals_the_doubled_whole_space_run",
+     "free surface by mirror symmetry: the doubled whole-space run (n1 x 2 n3) with mirrored loads and laws",
+     "max over the recorded fields and station series of max abs(half - doubled) / max abs(doubled); mode I, "
+     "linear cohesive, 32 x 16 half plane",
+     1e-12),
     ("bad-input",
      "tests/model/test_validation.py",
      "API.md: a bad input ends with one clear error naming the field",

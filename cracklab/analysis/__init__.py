@@ -49,7 +49,7 @@ def initial_front(scene) -> xr.DataArray:
     without such a node get x1 = 0."""
     grid = scene.grid
     crack = getattr(scene.law, "initial_crack", None)
-    out = np.zeros(grid.n3)
+    out = np.zeros(grid.shape[1])
     if crack is not None:
         crack = np.broadcast_to(np.asarray(crack, dtype=bool), grid.shape)
         tips = crack & ~np.roll(crack, -1, axis=0)

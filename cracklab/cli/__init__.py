@@ -277,8 +277,12 @@ def verify(store, quick) -> None:
                    "rate_state: a TPV101-like rupture (ageing law, forced nucleation), which reports its Newton "
                    "evaluations and solves per point and step; the friction benches are shear ruptures on 100 m "
                    "cells with the same time-step rule.")
+@click.option("--free-surface", is_flag=True,
+              help="The half plane of n1 x (n3 + 1) nodes below a free surface on x3 = 0 (mirror symmetry, "
+                   "Grid(free_surface=True)); to set against the periodic n1 x n3 grid and the doubled "
+                   "n1 x 2 n3 one (docs/performance.md, 'Free surface by mirror symmetry').")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from ..errors import InputError
@@ -287,7 +291,8 @@ def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law,
         mode = "I" if law == "traction_free" else "shear"
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
-                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps, law=law)
+                           threads=threads, engine_threads=engine_threads, fit_steps=fit_steps, law=law,
+                           free_surface=free_surface)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:

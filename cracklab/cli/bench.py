@@ -28,20 +28,28 @@ MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
 LAWS = ("traction_free", "slip_weakening", "rate_state")
 
 
-def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None, law="traction_free"):
-    """A traction-free plane under a random load on the components of ``mode``; or, with
-    ``law`` "slip_weakening" or "rate_state", a rupture on a plane of 100 m cells (module
-    docstring), loaded along x1 (x3 for mode III)."""
+def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None, law="traction_free",
+                free_surface=False):
+    """A traction-free plane under a random load on the components of ``mode`` (with
+    ``free_surface``: the half plane of n1 x (n3 + 1) nodes below a free surface, the odd
+    component's load zero on its two lines); or, with ``law`` "slip_weakening" or
+    "rate_state", a rupture on a plane of 100 m cells (module docstring), loaded along x1
+    (x3 for mode III)."""
     if law not in LAWS:
         raise InputError("law", f"must be one of {', '.join(LAWS)}, got {law!r}")
     if law != "traction_free" and mode == "I":
         raise InputError("mode", f"the {law} bench is a shear rupture: mode II, III or shear, got I")
+    if law != "traction_free" and free_surface:
+        raise InputError("free_surface", f"the {law} bench is a whole-space rupture; --free-surface goes with "
+                                         f"the traction_free bench")
     numerics = Numerics(engine=engine, fft_threads=int(threads),
                         engine_threads=None if engine_threads is None else int(engine_threads))
     if law == "traction_free":
-        grid = Grid(n1=n1, n3=n3, L1=1.0, L3=n3 / n1 if n3 > 1 else 1.0)
+        grid = Grid(n1=n1, n3=n3, L1=1.0, L3=n3 / n1 if n3 > 1 else 1.0, free_surface=free_surface)
         rng = np.random.default_rng(0)
         load = {f"tau0_{c}": rng.standard_normal(grid.shape) for c in MODES[mode]}
+        if free_surface and "tau0_3" in load:
+            load["tau0_3"][:, [0, -1]] = 0.0
         comps = tuple(sorted({c for c in MODES[mode]} | ({1, 3} if mode == "shear" and n3 > 1 else set())))
         beta = 0.9 * beta_max(grid, *numerics.scheme(comps), comps, nu=0.25)
         dt = beta * grid.dx_min
@@ -76,26 +84,42 @@ def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads
 
 class _Pair:
     """One forward and one inverse transform of the grid as a step runs them (into work
-    arrays, the inverse destroying its input and carrying 1/N: no copy, no scaling pass)."""
+    arrays, the inverse destroying its input and carrying 1/N: no copy, no scaling pass).
 
-    def __init__(self, grid, threads=1):
+    With a free surface and ``components`` holding the odd one (3D shear), the transforms of
+    a step take an even and the odd component together (``Transforms.forward_components``):
+    the pair is then half the time of that pair of components, the cost per component."""
+
+    def __init__(self, grid, threads=1, components=(2,)):
         self.f = f = Transforms(grid, threads)
-        self.x = f.empty(spectral=False)
-        self.x[...] = np.random.default_rng(1).standard_normal(grid.shape)
-        self.X, self.y = f.empty(), f.empty(spectral=False)
+        self.comps = (1, 3) if f.mirror and 3 in components else (2,)
+        rng = np.random.default_rng(1)
+        self.x = {c: f.empty(spectral=False) for c in self.comps}
+        for c, x in self.x.items():
+            x[...] = rng.standard_normal(grid.shape)
+            if f.mirror and c == 3:
+                x[:, [0, -1]] = 0.0
+        self.X = {c: f.empty() for c in self.comps}
+        self.y = {c: f.empty(spectral=False) for c in self.comps}
 
     def __call__(self) -> float:
         """Seconds for one pair."""
         f = self.f
+        if len(self.comps) == 1:
+            c = self.comps[0]
+            t0 = time.perf_counter()
+            f.forward(self.x[c], out=self.X[c])
+            f.inverse(self.X[c], out=self.y[c], overwrite=True, prescaled=True)
+            return time.perf_counter() - t0
         t0 = time.perf_counter()
-        f.forward(self.x, out=self.X)
-        f.inverse(self.X, out=self.y, overwrite=True, prescaled=True)
-        return time.perf_counter() - t0
+        f.forward_components(self.x, self.X)
+        f.inverse_components(self.X, self.y, prescaled=True)
+        return 0.5 * (time.perf_counter() - t0)
 
 
-def fft_pair_ms(grid, repeats=50, threads=1):
+def fft_pair_ms(grid, repeats=50, threads=1, components=(2,)):
     """Median of ``repeats`` transform pairs (:class:`_Pair`), ms."""
-    pair = _Pair(grid, threads)
+    pair = _Pair(grid, threads, components)
     return 1e3 * float(np.median([pair() for _ in range(repeats)]))
 
 
@@ -104,7 +128,7 @@ PAIR_EVERY = 10
 
 
 def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None,
-        law="traction_free"):
+        law="traction_free", free_surface=False):
     """Time every step of a bench scene; the median over the second half is the figure.
 
     The FFT baseline is timed in the same stretch (a pair after every PAIR_EVERY-th timed
@@ -114,13 +138,15 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     run's (runs of different lengths then carry the same terms: their costs compare the
     history's length alone). ``law``: the bench scene's law (:func:`bench_scene`); the
     rate-and-state one reports the Newton evaluations and solves per point and step of the
-    second half and the most evaluations one solve took.
+    second half and the most evaluations one solve took. ``free_surface``: the half plane
+    below a free surface (``Grid(free_surface=True)``: cosine and sine transforms along x3;
+    the FFT baseline is then the pair of an even component, cosine transform and real FFT).
     """
-    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law)
+    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface)
     stepper = Stepper(scene, interface_for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
     response = stepper.response
     overlap = any(ch.engine.overlap for ch in response.channels.values())
-    pair = _Pair(scene.grid, threads)
+    pair = _Pair(scene.grid, threads, scene.components)
     it = iter(stepper)
     if progress:
         from tqdm.auto import tqdm
@@ -152,11 +178,13 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         evaluations, solves = ((end[i] - newton[i]) / points_steps for i in (0, 1))
     timed = timed[np.isfinite(timed)]
     ms = 1e3 * float(np.median(timed))
-    pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads)
+    pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads,
+                                                                      components=scene.components)
     return {
-        "n1": n1, "n3": n3, "mode": mode, "law": law, "steps": scene.nsteps + 1, "engine": engine,
+        "n1": n1, "n3": n3, "free_surface": bool(free_surface), "mode": mode, "law": law,
+        "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
-        "us_per_point_per_step": 1e3 * ms / (n1 * n3),
+        "us_per_point_per_step": 1e3 * ms / (scene.grid.shape[0] * scene.grid.shape[1]),
         "threads": int(threads), "engine_threads": scene.numerics.history_threads,
         "overlap": overlap,
         "fft_pair_ms": pair_ms,

@@ -207,8 +207,10 @@ def _with_input_coords(ds, scene_json):
         return ds
     coords = {}
     for d, n, L in (("input_x1", "n1", "L1"), ("input_x3", "n3", "L3")):
-        if d in dims and n in grid and L in grid and int(grid[n]) == ds.sizes[d]:
-            coords[d] = (d, np.arange(int(grid[n])) * float(grid[L]) / int(grid[n]),
+        # a free surface's half plane has n3 + 1 nodes along x3 (cracklab.Grid)
+        nodes = int(grid.get(n, 0)) + (d == "input_x3" and grid.get("free_surface") is True)
+        if d in dims and n in grid and L in grid and nodes == ds.sizes[d]:
+            coords[d] = (d, np.arange(nodes) * float(grid[L]) / int(grid[n]),
                          {"long_name": f"{d[len('input_'):]} of the scene inputs"})
     return ds.assign_coords(coords)
 

@@ -43,12 +43,23 @@ class Grid:
     """Nodes x1_i = i L1/n1, x3_k = k L3/n3 on the periodic cell [0, L1) x [0, L3).
 
     ``n3 == 1`` is the plane (x3-invariant) problem and uses 1D transforms.
+
+    ``free_surface=True`` (3D only) puts a free surface on the line x3 = 0 by mirror
+    symmetry: the grid is then the half plane x3 = depth in [0, L3] below the surface,
+    with n3 + 1 nodes x3_k = k L3/n3, k = 0 .. n3 (n3 is the number of intervals; the
+    first node lies on the surface, the last on x3 = L3). It stands for the periodic
+    cell [0, L1) x [0, 2 L3) of n1 x 2 n3 nodes whose fields are mirrored about x3 = 0
+    (and so, by the period 2 L3, about x3 = L3 too): delta_1, delta_2, tau_1, tau_2 even,
+    delta_3, tau_3 odd (zero on both lines). Every field has the shape (n1, n3 + 1);
+    the transforms are cosine (even) and sine (odd) transforms along x3 and a real FFT
+    along x1 (solver/spectral.py, docs/equations.md "A free surface by mirror symmetry").
     """
 
     n1: int
     n3: int
     L1: float
     L3: float
+    free_surface: bool = False
 
     def __post_init__(self):
         check_fields_nesting(self, "grid")
@@ -75,6 +86,12 @@ class Grid:
                 raise InputError(f"grid.{name}", f"must be a number > 0, got {getattr(self, name)!r}")
         object.__setattr__(self, "L1", check_positive("grid.L1", self.L1))
         object.__setattr__(self, "L3", check_positive("grid.L3", self.L3))
+        if not isinstance(self.free_surface, (bool, np.bool_)):
+            raise InputError("grid.free_surface", f"must be true or false, got {self.free_surface!r}")
+        object.__setattr__(self, "free_surface", bool(self.free_surface))
+        if self.free_surface and n3 == 1:
+            raise InputError("grid.free_surface", "needs a 3D grid (n3 >= 2): the free surface is the line "
+                                                  "x3 = 0 of the plane, and the plane problem (n3 = 1) has no x3")
 
     @property
     def plane(self) -> bool:
@@ -82,7 +99,8 @@ class Grid:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return (self.n1, self.n3)
+        """The shape of every field: (n1, n3), or (n1, n3 + 1) on the half plane of a free surface."""
+        return (self.n1, self.n3 + 1) if self.free_surface else (self.n1, self.n3)
 
     @property
     def dx1(self) -> float:
@@ -102,20 +120,29 @@ class Grid:
 
     @property
     def x3(self) -> np.ndarray:
-        return np.arange(self.n3) * self.dx3
+        """Node coordinates x3_k = k L3/n3: k = 0 .. n3 - 1, or k = 0 .. n3 (the depth) below a free surface."""
+        return np.arange(self.shape[1]) * self.dx3
 
     @property
     def spectral_shape(self) -> tuple[int, int]:
         """Plane problem: half spectrum along x1. 3D: full spectrum along x1, half along x3
-        (the real transform runs along the contiguous axis x3, which FFTW does fastest)."""
+        (the real transform runs along the contiguous axis x3, which FFTW does fastest).
+        Free surface: half spectrum along x1 (k1 >= 0) and the n3 + 1 cosine / sine modes
+        m = pi j / L3, j = 0 .. n3, along x3: as many modes as the periodic n1 x n3 grid."""
         if self.plane:
             return (self.n1 // 2 + 1, 1)
+        if self.free_surface:
+            return (self.n1 // 2 + 1, self.n3 + 1)
         return (self.n1, self.n3 // 2 + 1)
 
     def _axes(self) -> tuple[np.ndarray, np.ndarray]:
         """The wave numbers k (along x1) and m (along x3) of the spectral layout's axes."""
         if self.plane:
             return 2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1), np.zeros(1)
+        if self.free_surface:
+            # m = pi j / L3, written as the doubled cell's (2 n3 nodes) so that both give the same numbers
+            return (2 * np.pi * np.fft.rfftfreq(self.n1, d=self.dx1),
+                    2 * np.pi * np.fft.rfftfreq(2 * self.n3, d=self.dx3))
         return (2 * np.pi * np.fft.fftfreq(self.n1, d=self.dx1),
                 2 * np.pi * np.fft.rfftfreq(self.n3, d=self.dx3))
 
@@ -132,6 +159,12 @@ class Grid:
         return float(np.sqrt((k**2).max() + (m**2).max()))
 
     def nearest_node(self, x1: float, x3: float = 0.0) -> tuple[int, int]:
+        """(i, k) of the node nearest (x1, x3), periodically; with a free surface the
+        nearest node of the doubled cell folded onto the half plane (its mirror image)."""
         i = int(round(x1 / self.dx1)) % self.n1
-        k = 0 if self.plane else int(round(x3 / self.dx3)) % self.n3
-        return i, k
+        if self.plane:
+            return i, 0
+        if self.free_surface:
+            k = int(round(x3 / self.dx3)) % (2 * self.n3)
+            return i, (2 * self.n3 - k if k > self.n3 else k)
+        return i, int(round(x3 / self.dx3)) % self.n3

@@ -110,14 +110,25 @@ class Record:
 
         region = self.region or {}
         s1 = sl(grid.x1, region.get("x1"), "x1")
+        if getattr(grid, "free_surface", False) and region.get("x3") is not None and region["x3"][1] < 0:
+            raise InputError("record.region.x3", f"{tuple(region['x3'])} lies above the free surface: with "
+                                                 f"grid.free_surface, x3 is the depth below it, in [0, L3 = {grid.L3:g}]")
         s3 = slice(None) if grid.plane else sl(grid.x3, region.get("x3"), "x3")
         return s1, s3
 
     def station_nodes(self, grid) -> dict:
         out = {}
+        surface = getattr(grid, "free_surface", False)
         for name, xy in (self.stations or {}).items():
             x1, x3 = (xy + (0.0,))[:2]
-            if not (0 <= x1 < grid.L1 and (grid.plane or 0 <= x3 < grid.L3)):
+            if surface and x3 < 0:
+                raise InputError(f"record.stations.{name}", f"({x1}, {x3}) lies above the free surface: with "
+                                                            f"grid.free_surface, x3 is the depth below it, in "
+                                                            f"[0, L3 = {grid.L3:g}]")
+            if surface and not (0 <= x1 < grid.L1 and x3 <= grid.L3):
+                raise InputError(f"record.stations.{name}", f"({x1}, {x3}) is outside the half plane [0, L1) x "
+                                                            f"[0, L3] below the free surface")
+            if not surface and not (0 <= x1 < grid.L1 and (grid.plane or 0 <= x3 < grid.L3)):
                 raise InputError(f"record.stations.{name}", f"({x1}, {x3}) is outside the grid [0, L1) x [0, L3)")
             out[name] = grid.nearest_node(x1, x3)
         return out

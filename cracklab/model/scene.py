@@ -20,6 +20,7 @@ FORMULATIONS = {name: scheme.rule for name, scheme in SCHEMES.items()}
 MAX_FFT_THREADS = 1024
 MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before any work
 MAX_SNAPSHOTS = 10**7
+MIRROR_ROUNDOFF = 1e-12     # |tau0_3| on the lines of a free surface's mirror, relative to max |tau0_3|
 DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
 
 
@@ -220,13 +221,15 @@ class Scene:
 
     def _check_shapes(self):
         shape = self.grid.shape
+        expected = (f"(n1, n3 + 1) = {shape} (the half plane x3 = 0 .. L3 below the free surface, nodes "
+                    f"k dx3, k = 0 .. n3: grid.free_surface)" if self.grid.free_surface else f"(n1, n3) = {shape}")
 
         def check(name, value, boolean=False):
             if value is None or np.ndim(value) == 0:
                 return
             arr = np.asarray(value)
             if arr.shape != shape:
-                raise InputError(name, f"field shape must be (n1, n3) = {shape}, got {arr.shape}")
+                raise InputError(name, f"field shape must be {expected}, got {arr.shape}")
             if not boolean and arr.dtype != bool and not np.all(np.isfinite(arr) | (arr == np.inf)):
                 raise InputError(name, "field values must be finite")
 
@@ -240,6 +243,17 @@ class Scene:
                 raise InputError(f"law.{key}", f"must be a boolean mask, got dtype {np.asarray(value).dtype}")
         for c in (1, 2, 3):
             check(f"loading.tau0_{c}", self.loading.field(c), boolean=True)
+        if self.grid.free_surface:
+            # odd about the surface x3 = 0 and, by the doubled cell's period, about x3 = L3
+            # (to the round-off of an odd expression, e.g. sin(pi x3 / L3) at x3 = L3)
+            f3 = np.abs(np.asarray(self.loading.tau0_3, dtype=float))
+            lines = f3 if f3.ndim == 0 else f3[:, [0, -1]]
+            if np.max(lines) > MIRROR_ROUNDOFF * np.max(f3) * (f3.ndim > 0):
+                raise InputError("loading.tau0_3", f"must be 0 on the free surface x3 = 0 and on x3 = L3: tau_3 is odd "
+                                                   f"about both lines of the mirror (grid.free_surface), got "
+                                                   f"max |tau0_3| = {float(np.max(lines)):g} there"
+                                                   + (" (a uniform tau0_3 is not odd: give a field)" if f3.ndim == 0
+                                                      else ""))
 
     @property
     def formulation(self) -> str:

@@ -10,6 +10,9 @@ Mode I (component 2) uses kernel C_I, Eq. (32). Shear (components 1, 3) is rotat
 into the longitudinal part (kernel C_II) and the transverse part (kernel C_III) of
 each mode, Eqs. (27)-(28) and (34): two scalar convolutions per mode, not four.
 In the plane problem (n3 == 1) component 1 is mode II and component 3 is mode III.
+With a free surface (Grid.free_surface) the transforms take the components together (3 is
+odd about the surface, 1 and 2 even: solver/spectral.py) and hand back the doubled cell's
+Fourier coefficients, so that the rotation, the channels and the engines below are the same.
 The functionals below are written for the identical pair (scale 1/2, the paper's
 form); with scale s, mu/2 reads s mu throughout.
 
@@ -31,7 +34,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..history import make_engine
-from .loops import plus_product, product_predict, rotate, shear_correct, shear_predict
+from .loops import (mirror_rotate, mirror_separate, mirror_shear_correct, mirror_shear_predict, plus_product,
+                    product_predict, rotate, shear_correct, shear_predict)
 from .schemes import SCHEMES, Channel
 from .spectral import Transforms
 
@@ -90,6 +94,9 @@ class HalfSpace:
         gamma = q * material.cs * dt
         nu = material.nu
         self.shear3d = (not grid.plane) and any(c in self.components for c in (1, 3))
+        #: a free surface: the shear pair (1, 3) goes through one transform of the doubled cell,
+        #: its separation and joining fused with the rotations (solver/spectral.py, loops.mirror_*)
+        self.pair = self.shear3d and self.fft.mirror
         self.dt = dt
         scheme = SCHEMES[formulation]
         self.scheme = scheme
@@ -165,7 +172,15 @@ class HalfSpace:
         return out
 
     def _forward(self, fields: dict, slot: str = "D") -> dict:
-        return self._split({c: self.fft.forward(fields[c], out=self._spec[slot][c]) for c in self.components}, slot)
+        if self.pair:  # free surface: the shear pair's doubled spectrum straight into its channels
+            out = {}
+            if 2 in self.components:  # first: the pair's spectrum lives in the transforms' work array
+                out["I"] = self.fft.forward(fields[2], out=self._spec[slot][2], component=2)
+            W = self.fft.forward_pair(fields[1], fields[3])
+            out["II"], out["III"] = mirror_rotate(self.c, self.s, W, out=self._rot[slot])
+            return out
+        return self._split(self.fft.forward_components({c: fields[c] for c in self.components}, self._spec[slot]),
+                           slot)
 
     def _inverse(self, F: dict, prescaled: bool = False) -> dict:
         """f_j of the channel spectra F (destroyed), in the work arrays of the half space
@@ -180,7 +195,7 @@ class HalfSpace:
     def _to_real(self, F: dict) -> dict:
         """f_j of the component spectra F (destroyed; they carry the 1/N of the inverse
         transform), in the work arrays of the half space."""
-        return {c: self.fft.inverse(Fc, out=self._f[c], overwrite=True, prescaled=True) for c, Fc in F.items()}
+        return self.fft.inverse_components(F, self._f, prescaled=True)
 
     # -- public -----------------------------------------------------------------------
     def predict(self, v_prev: dict) -> dict:
@@ -202,8 +217,15 @@ class HalfSpace:
             args = [(V[k], ch.engine.push(V[k], out=self._S[k]), ch.engine.start_weight(n), ch.v0, ch.dknown,
                      ch.static, ch.pre, ch.K) for k, ch in zip(("II", "III"), chans)]
             self._launch()
-            HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"],
-                               H=(chans[0].H, chans[1].H),  # H of the last step is rewritten in place
+            H = (chans[0].H, chans[1].H)  # H of the last step is rewritten in place
+            if self.pair:  # free surface: the components' spectra joined into the doubled cell's
+                HH = mirror_shear_predict(self.c, self.s, args[0], args[1], self.dt, self.fft.inverse_buffer(), H=H,
+                                          scale=self.fft.norm)
+                if HH is not None:
+                    chans[0].H, chans[1].H = HH
+                    f1, f3 = self.fft.inverse_pair(self._f[1], self._f[3], prescaled=True)
+                    return {1: f1, 3: f3}
+            HH = shear_predict(self.c, self.s, args[0], args[1], self.dt, self._rot["join"], H=H,
                                scale=self.fft.norm)
             if HH is not None:
                 chans[0].H, chans[1].H = HH
@@ -230,8 +252,16 @@ class HalfSpace:
         """Product scheme: f_n with the current velocity taken as ``v_pred`` (the corrector)."""
         if self.shear3d and "I" not in self.channels:
             # rotation, corrector and rotation back in one compiled pass
-            X = {c: self.fft.forward(v_pred[c], out=self._spec["V"][c]) for c in self.components}
             II, III = self.channels["II"], self.channels["III"]
+            if self.pair:  # free surface: from and into the doubled cell's spectra, in the same pass
+                W = self.fft.forward_pair(v_pred[1], v_pred[3])
+                if mirror_shear_correct(self.c, self.s, W, II.H, II.K, III.H, III.K, self.fft.inverse_buffer(),
+                                        scale=self.fft.norm) is not None:
+                    f1, f3 = self.fft.inverse_pair(self._f[1], self._f[3], prescaled=True)
+                    return {1: f1, 3: f3}
+                X = dict(zip((1, 3), mirror_separate(W, self._spec["V"][1], self._spec["V"][3])))
+            else:
+                X = self.fft.forward_components({c: v_pred[c] for c in self.components}, self._spec["V"])
             out = shear_correct(self.c, self.s, X[1], X[3], II.H, II.K, III.H, III.K, self._rot["join"],
                                 scale=self.fft.norm)
             if out is not None:

@@ -172,9 +172,151 @@ def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03,
         F3[i] = (cc * f3 - ss * f2) * nrm
 
 
+def _mirror_pack_loop(e, o, has_e, has_o, z):
+    # the doubled cell's field z (n1, 2 n3) of an even field e and an odd one o on the half
+    # plane (n1, n3 + 1): z_k = e_k + o_k, z_{2 n3 - k} = e_k - o_k (o vanishes at k = 0, n3)
+    n1, two = z.shape
+    m = two // 2
+    for i in range(n1):
+        z[i, 0] = e[i, 0] if has_e else 0.0
+        z[i, m] = e[i, m] if has_e else 0.0
+        for k in range(1, m):
+            x = e[i, k] if has_e else 0.0
+            y = o[i, k] if has_o else 0.0
+            z[i, k] = x + y
+            z[i, two - k] = x - y
+
+
+def _mirror_separate_loop(W, has_e, has_o, E, O):
+    # the doubled cell's spectrum W (n1, n3 + 1) of z = e + o -> E, O (n1//2 + 1, n3 + 1):
+    # E(k) = (W(k) + conj W(-k)) / 2 (even about x3 = 0: Hermitian in k), O(k) = (W(k) - conj W(-k)) / 2
+    n1, m = W.shape
+    for k in range(n1 // 2 + 1):
+        kk = (n1 - k) % n1
+        for j in range(m):
+            w = W[k, j]
+            v = W[kk, j].conjugate()
+            if has_e:
+                E[k, j] = 0.5 * (w + v)
+            if has_o:
+                O[k, j] = 0.5 * (w - v)
+
+
+def _mirror_join_loop(E, O, has_e, has_o, top, bottom):
+    # inverse of the separation: W(k) = E(k) + O(k), W(-k) = conj(E(k) - O(k)); on the rows
+    # k = 0 and n1/2 (their own conjugates) the even part's real and the odd part's imaginary
+    # part. W's rows 0 .. n1/2 are ``top``, the others ``bottom`` (two arrays: stores into two
+    # rows of one array keep the loop from vectorising)
+    h, m = top.shape
+    h -= 1
+    for k in range(h + 1):
+        edge = k == 0 or k == h
+        for j in range(m):
+            a = E[k, j] if has_e else 0.0j
+            b = O[k, j] if has_o else 0.0j
+            top[k, j] = complex(a.real, b.imag) if edge else a + b
+            if not edge:
+                bottom[h - 1 - k, j] = (a - b).conjugate()
+
+
+def _mirror_split_loop(z, scale, has_e, has_o, e, o):
+    # the half plane's even and odd parts of the doubled field z, times scale
+    n1, two = z.shape
+    m = two // 2
+    for i in range(n1):
+        if has_e:
+            e[i, 0] = z[i, 0] * scale
+            e[i, m] = z[i, m] * scale
+        if has_o:
+            o[i, 0] = 0.0
+            o[i, m] = 0.0
+        for k in range(1, m):
+            p = z[i, k]
+            q = z[i, two - k]
+            if has_e:
+                e[i, k] = 0.5 * (p + q) * scale
+            if has_o:
+                o[i, k] = 0.5 * (p - q) * scale
+
+
+def _mirror_rotate_loop(c, s, W, o1, o2):
+    # mirror_separate, then rotate (Eq. 28), in one pass: W (n1, n3 + 1) -> channels (h, n3 + 1)
+    n1, m = W.shape
+    for k in range(n1 // 2 + 1):
+        kk = (n1 - k) % n1
+        for j in range(m):
+            w = W[k, j]
+            v = W[kk, j].conjugate()
+            x = 0.5 * (w + v)
+            y = 0.5 * (w - v)
+            cc = c[k, j]
+            ss = 1.0 * s[k, j]
+            o1[k, j] = cc * x + ss * y
+            o2[k, j] = cc * y - ss * x
+
+
+def _mirror_shear_correct_loop(c, s, W, H2, K2, H3, K3, nrm, top, bottom):
+    # shear_correct with mirror_separate before it and mirror_join after it, in one pass
+    n1, m = W.shape
+    h = n1 // 2
+    for k in range(h + 1):
+        edge = k == 0 or k == h
+        kk = (n1 - k) % n1
+        for j in range(m):
+            w = W[k, j]
+            v = W[kk, j].conjugate()
+            x = 0.5 * (w + v)
+            y = 0.5 * (w - v)
+            cc = c[k, j]
+            ss = 1.0 * s[k, j]
+            v2 = cc * x + ss * y
+            v3 = cc * y - ss * x
+            f2 = H2[k, j] + K2[k, j] * v2
+            f3 = H3[k, j] + K3[k, j] * v3
+            ss = -1.0 * s[k, j]
+            g1 = (cc * f2 + ss * f3) * nrm   # back to components, then mirror_join
+            g3 = (cc * f3 - ss * f2) * nrm
+            # (a select and a guarded store: an if/else of two stores keeps the loop from vectorising)
+            top[k, j] = complex(g1.real, g3.imag) if edge else g1 + g3
+            if not edge:
+                bottom[h - 1 - k, j] = (g1 - g3).conjugate()
+
+
+def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03, v03, dk3, st3, pre3, K3,
+                               dt, nrm, H2, H3, top, bottom):
+    # shear_predict with mirror_join after it, in one pass (the channel arrays are (h, n3 + 1))
+    m = c.shape[1]
+    h = c.shape[0] - 1
+    for k in range(h + 1):
+        edge = k == 0 or k == h
+        for j in range(m):
+            d = dk2[k, j] + dt * V2[k, j]
+            dk2[k, j] = d
+            hh = st2[k, j] * d + pre2[k, j] * (S2[k, j] + e02[k, j] * v02[k, j])
+            H2[k, j] = hh
+            f2 = hh + K2[k, j] * V2[k, j]
+            d = dk3[k, j] + dt * V3[k, j]
+            dk3[k, j] = d
+            hh = st3[k, j] * d + pre3[k, j] * (S3[k, j] + e03[k, j] * v03[k, j])
+            H3[k, j] = hh
+            f3 = hh + K3[k, j] * V3[k, j]
+            cc = c[k, j]
+            ss = -1.0 * s[k, j]
+            g1 = (cc * f2 + ss * f3) * nrm   # back to components, then mirror_join
+            g3 = (cc * f3 - ss * f2) * nrm
+            # (a select and a guarded store: an if/else of two stores keeps the loop from vectorising)
+            top[k, j] = complex(g1.real, g3.imag) if edge else g1 + g3
+            if not edge:
+                bottom[h - 1 - k, j] = (g1 - g3).conjugate()
+
+
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
        "shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "axpy": _axpy_loop,
-       "xpay": _xpay_loop, "plus_mean": _plus_mean_loop, "hkv": _hkv_loop}
+       "xpay": _xpay_loop, "plus_mean": _plus_mean_loop, "hkv": _hkv_loop,
+       "mirror_pack": _mirror_pack_loop, "mirror_separate": _mirror_separate_loop,
+       "mirror_join": _mirror_join_loop, "mirror_split": _mirror_split_loop,
+       "mirror_rotate": _mirror_rotate_loop, "mirror_shear_correct": _mirror_shear_correct_loop,
+       "mirror_shear_predict": _mirror_shear_predict_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):
@@ -368,4 +510,151 @@ def shear_predict(c, s, ch2, ch3, dt, out, H=(None, None), scale=1.0):
               else np.empty(shape, dtype=complex) for h in H)
     f(c.ravel(), s.ravel(), *(a.ravel() for a in chans[0]), *(a.ravel() for a in chans[1]), float(dt), float(scale),
       H2.ravel(), H3.ravel(), out[0].ravel(), out[1].ravel())
+    return H2, H3
+
+
+# -- the free surface's mirror (solver/spectral.py): the half plane's even and odd fields and
+# the doubled cell's field and spectrum.  Each is one compiled pass (numpy without numba:
+# the same numbers, the same operations in the same order).
+_NONE_R = np.zeros((1, 1))
+_NONE_C = np.zeros((1, 1), dtype=complex)
+
+
+def _check_shapes(what, shape, *arrays):
+    """A ValueError unless every array has ``shape`` (the compiled passes do not check bounds)."""
+    for a in arrays:
+        if np.shape(a) != tuple(shape):
+            raise ValueError(f"a {what} of shape {np.shape(a)} where the free surface's transform needs {tuple(shape)}")
+
+
+def mirror_pack(even, odd, z):
+    """z (n1, 2 n3): the doubled cell's field of ``even`` and ``odd`` (n1, n3 + 1; either may
+    be None), z_k = e_k + o_k and z_{2 n3 - k} = e_k - o_k (o taken as 0 at k = 0 and n3)."""
+    f = _compiled("mirror_pack")
+    e = _NONE_R if even is None else np.ascontiguousarray(even, dtype=float)
+    o = _NONE_R if odd is None else np.ascontiguousarray(odd, dtype=float)
+    half = (z.shape[0], z.shape[1] // 2 + 1)
+    _check_shapes("field", half, *(a for a, given in ((e, even), (o, odd)) if given is not None))
+    if f is not None:
+        f(e, o, even is not None, odd is not None, z)
+        return z
+    m = z.shape[1] // 2
+    x = e if even is not None else np.zeros((z.shape[0], m + 1))
+    y = o[:, 1:m] if odd is not None else 0.0
+    z[:, 0], z[:, m] = x[:, 0], x[:, m]
+    z[:, 1:m] = x[:, 1:m] + y
+    z[:, m + 1:] = (x[:, 1:m] - y)[:, ::-1]
+    return z
+
+
+def mirror_separate(W, E=None, O=None):
+    """From the doubled cell's spectrum W (n1, n3 + 1) of z = e + o, the spectra of the even
+    part E = (W(k1) + conj W(-k1)) / 2 and of the odd part O = (W(k1) - conj W(-k1)) / 2 on
+    k1 = 0 .. n1/2, into ``E`` and ``O`` (either may be None)."""
+    f = _compiled("mirror_separate")
+    _check_shapes("spectrum", (W.shape[0] // 2 + 1, W.shape[1]), *(a for a in (E, O) if a is not None))
+    if f is not None:
+        f(W, E is not None, O is not None, _NONE_C if E is None else E, _NONE_C if O is None else O)
+        return E, O
+    n1 = W.shape[0]
+    k = np.arange(n1 // 2 + 1)
+    w, v = W[k], W[(n1 - k) % n1].conj()
+    if E is not None:
+        E[...] = 0.5 * (w + v)
+    if O is not None:
+        O[...] = 0.5 * (w - v)
+    return E, O
+
+
+def mirror_join(E, O, W):
+    """Inverse of :func:`mirror_separate`: W (n1, n3 + 1) from the half spectra E (even part)
+    and O (odd part), either may be None; on the rows k1 = 0 and n1/2 (each its own
+    conjugate) W takes the real part of E and the imaginary part of O."""
+    f = _compiled("mirror_join")
+    _check_shapes("spectrum", (W.shape[0] // 2 + 1, W.shape[1]), *(a for a in (E, O) if a is not None))
+    if f is not None:
+        h = W.shape[0] // 2
+        f(_NONE_C if E is None else E, _NONE_C if O is None else O, E is not None, O is not None, W[:h + 1], W[h + 1:])
+        return W
+    n1, h = W.shape[0], W.shape[0] // 2
+    a = E if E is not None else np.zeros((h + 1, W.shape[1]), dtype=complex)
+    b = O if O is not None else np.zeros((h + 1, W.shape[1]), dtype=complex)
+    W[1:h] = a[1:h] + b[1:h]
+    W[n1 - 1:h:-1] = (a[1:h] - b[1:h]).conj()
+    for k in (0, h):
+        W[k] = a[k].real + 1j * b[k].imag
+    return W
+
+
+def mirror_split(z, scale, even=None, odd=None):
+    """The half plane's even part (z_k + z_{2 n3 - k}) / 2 and odd part (z_k - z_{2 n3 - k}) / 2
+    of the doubled field z, times ``scale``, into ``even`` and ``odd`` (n1, n3 + 1; either
+    may be None; the odd part is 0 at k = 0 and n3)."""
+    f = _compiled("mirror_split")
+    _check_shapes("field", (z.shape[0], z.shape[1] // 2 + 1), *(a for a in (even, odd) if a is not None))
+    if f is not None:
+        f(z, float(scale), even is not None, odd is not None, _NONE_R if even is None else even,
+          _NONE_R if odd is None else odd)
+        return even, odd
+    m = z.shape[1] // 2
+    p, q = z[:, 1:m], z[:, :m:-1]
+    if even is not None:
+        even[:, 0], even[:, m] = z[:, 0] * scale, z[:, m] * scale
+        even[:, 1:m] = 0.5 * (p + q) * scale
+    if odd is not None:
+        odd[:, 0] = odd[:, m] = 0.0
+        odd[:, 1:m] = 0.5 * (p - q) * scale
+    return even, odd
+
+
+def _spectra(shape, *arrays) -> bool:
+    """Whether ``arrays`` are C-contiguous complex arrays of ``shape``."""
+    return all(isinstance(a, np.ndarray) and a.shape == tuple(shape) and a.dtype == complex and a.flags.c_contiguous
+               for a in arrays)
+
+
+def mirror_rotate(c, s, W, out=None):
+    """The channels (II, III) of Eq. (28) of the doubled cell's spectrum W of delta_1 (even)
+    plus delta_3 (odd) (solver/spectral.py): :func:`mirror_separate`, then :func:`rotate`,
+    in one pass, into ``out`` where given (the same numbers)."""
+    f = _compiled("mirror_rotate")
+    shape = np.shape(c)
+    if f is None or out is None or not (_spectra(shape, *out) and _spectra(W.shape, W) and
+                                        c.flags.c_contiguous and s.flags.c_contiguous):
+        X1, X3 = mirror_separate(W, np.empty(shape, dtype=complex), np.empty(shape, dtype=complex))
+        return rotate(c, s, X1, X3, out=out)
+    f(c, s, W, out[0], out[1])
+    return out
+
+
+def mirror_shear_correct(c, s, W, H2, K2, H3, K3, Wout, scale=1.0):
+    """:func:`shear_correct` on the doubled cell's spectrum W (delta_1 + delta_3, as from
+    :func:`mirror_pack`), its result joined into the doubled spectrum ``Wout`` of the
+    inverse transform (:func:`mirror_join`), in one pass; None when it cannot run."""
+    f = _compiled("mirror_shear_correct")
+    shape = np.shape(c)
+    if f is None or not (_same(c, s) and _spectra(shape, H2, H3) and _same(c, K2, K3) and _spectra(W.shape, W, Wout)):
+        return None
+    h = Wout.shape[0] // 2
+    f(c, s, W, H2, K2, H3, K3, float(scale), Wout[:h + 1], Wout[h + 1:])
+    return Wout
+
+
+def mirror_shear_predict(c, s, ch2, ch3, dt, Wout, H=(None, None), scale=1.0):
+    """:func:`shear_predict`, its result joined into the doubled spectrum ``Wout`` of the
+    inverse transform (:func:`mirror_join`), in one pass; returns (H2, H3) as
+    shear_predict does, or None when it cannot run."""
+    f = _compiled("mirror_shear_predict")
+    if f is None:
+        return None
+    shape = np.shape(c)
+    chans = [[np.ascontiguousarray(np.broadcast_to(a, shape)) if i >= 5 else a for i, a in enumerate(ch)]
+             for ch in (ch2, ch3)]
+    if not (_same(c, s, *chans[0], *chans[1]) and _spectra(Wout.shape, Wout)) or \
+            any(a.dtype != complex for a in (chans[0][0], chans[0][4], chans[1][4])):
+        return None
+    H2, H3 = (h if isinstance(h, np.ndarray) and h.shape == shape and h.dtype == complex and h.flags.c_contiguous
+              else np.empty(shape, dtype=complex) for h in H)
+    h = Wout.shape[0] // 2
+    f(c, s, *chans[0], *chans[1], float(dt), float(scale), H2, H3, Wout[:h + 1], Wout[h + 1:])
     return H2, H3

@@ -139,7 +139,7 @@ class Stepper:
         """Mean crack length of constant-K loading for the law state ``state`` (None when
         the load does not need it)."""
         area, width = self._area_width
-        return _crack_length(self.scene.law, state, self.load, area, width, self.l0)
+        return _crack_length(self.scene.law, state, self.load, area, width, self.l0, self.scene.grid.free_surface)
 
     def update_law(self, n, t, trial, v, tau):
         """Step (i) for the law: its update with the slip ``trial`` (and v, tau of step
@@ -150,7 +150,7 @@ class Stepper:
         law.update(lstate, trial, scene.dt, v if n > 0 else None, t, tau if n > 0 else None)
         load = self.load
         if load.constant_K and self.l0 is None:
-            self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None)
+            self.l0 = load.l0 or _crack_length(law, lstate, load, area, width, None, scene.grid.free_surface)
             if load.l0 is None:
                 # Loading.factor scales by sqrt(l0 / l): give it the initial length
                 self.load = dataclasses.replace(load, l0=self.l0)
@@ -230,13 +230,19 @@ def reads_slip(law, comps) -> bool:
     return bool(getattr(law, "reads_slip", True)) or (2 in comps and bool(getattr(law, "contact", False)))
 
 
-def _crack_length(law, state, load, area, width, l0):
-    """Mean crack length for constant-K loading (None when the load does not need it)."""
+def _crack_length(law, state, load, area, width, l0, mirror=False):
+    """Mean crack length for constant-K loading (None when the load does not need it).
+    ``mirror``: the half plane of a free surface, whose nodes on x3 = 0 and x3 = L3 count
+    half (in the doubled cell each stands for itself alone, the others for two)."""
     if not load.constant_K:
         return None
     failed = law.failed(state)
-    length = failed_length(failed, area, width) if failed is not None else None
-    return length or l0
+    if failed is None:
+        return l0
+    if mirror and np.ndim(failed) == 2:
+        count = np.count_nonzero(failed) - 0.5 * (np.count_nonzero(failed[:, 0]) + np.count_nonzero(failed[:, -1]))
+        return float(failed_length(count, area, width)) or l0
+    return failed_length(failed, area, width) or l0
 
 
 def check_finite(n, t, v, grid):

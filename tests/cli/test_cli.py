@@ -126,3 +126,17 @@ def test_bench_friction_laws(law):
         assert out["newton_evaluations_per_point_step"] is None
     res = CliRunner().invoke(main, ["bench", "--n1", "16", "--n3", "16", "--steps", "10", "--law", law, "--mode", "I"])
     assert res.exit_code != 0 and "mode: the" in res.output
+
+
+def test_bench_free_surface():
+    """--free-surface: the half plane n1 x (n3 + 1) below a free surface (the mirror), with
+    the same eight transforms per step in shear; the baseline pair is then the cost per
+    component of the shear pair's transform of the doubled cell."""
+    res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "16", "--mode", "shear", "--steps", "30",
+                                    "--free-surface", "--json"])
+    assert res.exit_code == 0, res.output
+    out = json.loads(res.output)
+    assert out["free_surface"] is True and out["transforms_per_step"] == 8 and out["fft_pair_ms"] > 0
+    res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "1", "--steps", "10", "--free-surface"])
+    assert res.exit_code != 0 and "grid.free_surface" in res.output
+    assert "--free-surface" in CliRunner().invoke(main, ["bench", "--help"]).output

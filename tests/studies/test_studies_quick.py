@@ -195,3 +195,16 @@ def test_performance_study_quick_writes_one_table_per_thread_count(tmp_path):
     md = (tmp_path / "bench.md").read_text()
     assert md.count("| 128 x 128 | I |") == 4 and "1 thread:" in md
     assert "2 engine threads, 1 FFT thread (the engine's advance overlapped with the FFTs and the law):" in md
+
+
+def test_mirror_cost_study_summary():
+    """studies/performance/mirror.py: medians, per-round and fastest ratios of the half plane
+    against the periodic and the doubled grids (synthetic runs: no bench here)."""
+    study = _load("performance_mirror", ROOT / "studies" / "performance" / "mirror.py")
+    runs = {"half": [{"ms_per_step": 2.0, "fft_pair_ms": 0.2}, {"ms_per_step": 3.0, "fft_pair_ms": 0.3}],
+            "periodic": [{"ms_per_step": 2.0, "fft_pair_ms": 0.1}, {"ms_per_step": 2.0, "fft_pair_ms": 0.1}],
+            "doubled": [{"ms_per_step": 4.0, "fft_pair_ms": 0.4}, {"ms_per_step": 5.0, "fft_pair_ms": 0.4}]}
+    s = study.summary(runs)
+    assert s["ms_per_step"] == {"half": 2.5, "periodic": 2.0, "doubled": 4.5}
+    assert s["half_over_periodic"] == 1.25 and s["per_round_half_over_periodic"] == [1.0, 1.5]
+    assert s["fastest_half_over_periodic"] == 1.0 and s["fastest_half_over_doubled"] == 0.5
