@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import InputError, check_fields_nesting
 from .base import ALL, SHEAR, Law, bonded_mask, check_parameter, parameter
-from .solve import solve_velocity
+from .solve import solve_normal_first, solve_velocity
 
 
 @dataclass(frozen=True)
@@ -87,19 +87,10 @@ class CoupledCohesive(Law):
     def solve(self, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
         """Step (v): the normal component against tau_c x factor, then the shear ones against
         the shear strength with the normal traction just found."""
-        part = (lambda cs: None if load is None else (load[0], {c: load[1][c] for c in cs}))
-        shear = tuple(c for c in SHEAR if c in tau_star)
         if 2 not in tau_star:
             return solve_velocity(self, state, tau_star, delta, eta, dt, self.tau_s * strength, load, traction)
-        v, tau = solve_velocity(self, state, {2: tau_star[2]}, delta, eta, dt, self.tau_c * strength,
-                                part((2,)), True)
-        if not shear:
-            return v, (tau if traction else None)
-        vs, ts = solve_velocity(self, state, {c: tau_star[c] for c in shear}, delta, eta, dt,
-                                self.shear_strength(strength, tau), part(shear), traction)
-        v.update(vs)
-        v = {c: v[c] for c in sorted(v)}
-        return v, ({c: (tau if c == 2 else ts)[c] for c in v} if traction else None)
+        return solve_normal_first(self, state, tau_star, delta, eta, dt, self.tau_c * strength,
+                                  lambda tau: self.shear_strength(strength, tau), load, traction)
 
     # -- the energy budget: the work of the cohesive tractions along the recorded path
     def energy_state(self, grid):

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import ALL, SHEAR, Law
-from .solve import solve_velocity
+from .solve import solve_normal_first, solve_velocity
 
 
 class Friction(Law):
@@ -64,13 +64,5 @@ class Friction(Law):
         strength, contact), then the shear components against coefficient x max(0, -tau_2)."""
         if not self.follows_normal or 2 not in tau_star:
             return solve_velocity(self, state, tau_star, delta, eta, dt, strength, load, traction)
-        part = (lambda cs: None if load is None else (load[0], {c: load[1][c] for c in cs}))
-        shear = tuple(c for c in SHEAR if c in tau_star)
-        v, tau = solve_velocity(self, state, {2: tau_star[2]}, delta, eta, dt, 0.0, part((2,)), True)
-        if not shear:       # the plane problem with only the normal component loaded
-            return v, (tau if traction else None)
-        vs, ts = solve_velocity(self, state, {c: tau_star[c] for c in shear}, delta, eta, dt,
-                                self.applied_strength(strength, tau), part(shear), traction)
-        v.update(vs)
-        v = {c: v[c] for c in sorted(v)}
-        return v, ({c: (tau if c == 2 else ts)[c] for c in v} if traction else None)
+        return solve_normal_first(self, state, tau_star, delta, eta, dt, 0.0,
+                                  lambda tau: self.applied_strength(strength, tau), load, traction)

@@ -8,6 +8,24 @@ from ..solver import loops
 SHEAR = (1, 3)
 
 
+def solve_normal_first(law, state, tau_star, delta, eta, dt, normal_strength, shear_strength, load=None,
+                       traction=True):
+    """Step (v) of a law whose shear strength depends on the normal traction of the same
+    step: the normal component first against ``normal_strength`` (with the law's broken
+    points and contact), then the shear components against ``shear_strength(tau)``, a
+    function of the tractions just found. Returns (v, tau) as :func:`solve_velocity`."""
+    part = (lambda cs: None if load is None else (load[0], {c: load[1][c] for c in cs}))
+    shear = tuple(c for c in SHEAR if c in tau_star)
+    v, tau = solve_velocity(law, state, {2: tau_star[2]}, delta, eta, dt, normal_strength, part((2,)), True)
+    if not shear:       # the plane problem with only the normal component loaded
+        return v, (tau if traction else None)
+    vs, ts = solve_velocity(law, state, {c: tau_star[c] for c in shear}, delta, eta, dt, shear_strength(tau),
+                            part(shear), traction)
+    v.update(vs)
+    v = {c: v[c] for c in sorted(v)}
+    return v, ({c: (tau if c == 2 else ts)[c] for c in v} if traction else None)
+
+
 def solve_velocity(law, state, tau_star, delta, eta, dt, strength, load=None, traction=True):
     """Step (v): compare strength with the elastic estimate tau* and solve Eq. (3) for v.
 
