@@ -13,6 +13,12 @@ component of the shear pair's transform of the doubled cell), the ratios half / 
 and half / doubled of the medians, the min-max of the per-round ratios, and the ratio of
 the fastest rounds (the least disturbed runs of a shared host). docs/performance.md,
 "Free surface by mirror symmetry", quotes its output.
+
+``--in-process``: the three runs of a case stepped in one process instead, alternately in
+blocks of 20 steps over the second half of the run (the first half fills the histories
+untimed), so that every variant sees the host in the same seconds; the medians of the
+blocks' ms per step and the median of the blocks' ratios. The three share the caches
+there, so the absolute figures are above `cracklab bench`'s; the ratios are what it is for.
 """
 from __future__ import annotations
 
@@ -22,6 +28,7 @@ import os
 import statistics
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -39,6 +46,37 @@ def bench(n1, n3, variant, mode, steps):
     if out.returncode:
         raise SystemExit(f"{' '.join(cmd)} failed:\n{out.stderr}")
     return json.loads(out.stdout)
+
+
+def in_process(n1, n3, mode, steps, block=20):
+    """ms per step of the three variants stepped alternately in blocks in this process."""
+    import numpy as np
+
+    if str(ROOT) not in sys.path:  # this checkout's package, as the benches use
+        sys.path.insert(0, str(ROOT))
+    from cracklab.cli.bench import bench_scene
+    from cracklab.solver.interfaces import for_scene
+    from cracklab.solver.spectral import Transforms
+    from cracklab.solver.stepper import Stepper
+
+    shapes = {"half": (n1, n3, True), "periodic": (n1, n3, False), "doubled": (n1, 2 * n3, False)}
+    its, times = {}, {v: [] for v in VARIANTS}
+    for v, (a, b, surface) in shapes.items():
+        scene = bench_scene(a, b, mode, steps, "exponential", 1, None, surface)
+        its[v] = iter(Stepper(scene, for_scene(scene, Transforms(scene.grid, 1))))
+        for _ in range(steps // 2 + 1):
+            next(its[v])
+    for _ in range((steps - steps // 2) // block):
+        for v in VARIANTS:
+            t0 = time.perf_counter()
+            for _ in range(block):
+                next(its[v])
+            times[v].append(1e3 * (time.perf_counter() - t0) / block)
+    med = {v: float(np.median(times[v])) for v in VARIANTS}
+    return {"ms_per_step": med, "half_over_periodic": med["half"] / med["periodic"],
+            "half_over_doubled": med["half"] / med["doubled"],
+            "block_ratio_half_over_periodic": float(np.median(np.divide(times["half"], times["periodic"]))),
+            "blocks": len(times["half"])}
 
 
 def summary(runs):
@@ -64,10 +102,19 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--steps", type=int, default=2000)
     ap.add_argument("--json", dest="out")
+    ap.add_argument("--in-process", action="store_true")
     a = ap.parse_args(argv)
     report = {}
     for case in a.cases.split(","):
         n1, n3 = (int(x) for x in case.split("x"))
+        if a.in_process:
+            s = in_process(n1, n3, a.mode, a.steps)
+            report[case] = {"mode": a.mode, "steps": a.steps, "in_process": True, **s}
+            print(f"{case} {a.mode} in one process ({s['blocks']} blocks of 20 steps each): ms/step "
+                  + ", ".join(f"{v} {s['ms_per_step'][v]:.3f}" for v in VARIANTS)
+                  + f"; half/periodic {s['half_over_periodic']:.3f} (median block ratio "
+                  f"{s['block_ratio_half_over_periodic']:.3f}), half/doubled {s['half_over_doubled']:.3f}", flush=True)
+            continue
         runs = {v: [] for v in VARIANTS}
         for r in range(a.rounds):
             for v in VARIANTS:
