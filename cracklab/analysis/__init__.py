@@ -17,8 +17,15 @@ point behind it by linear interpolation (of the rupture time, or of the opening)
 
 The crack length of the failed area (:func:`failed_length`: the failed cells' area over
 the plane's width across the crack, with :func:`cell_area_and_width`) is the one
-definition the constant-K load of a run, the energy budget and
-:func:`cracklab.plots.crack_length` use; :func:`mean_crack_length` is the front's.
+definition the constant-K load of a run, the energy budget and :func:`crack_length` use;
+:func:`mean_crack_length` is the front's. :func:`rupture_statistics` sums up the
+rupture times of a run; :func:`summary` tabulates an ensemble.
+
+Every function takes a single run or an ensemble (``cracklab.open_ensemble``, or a
+result of these functions with a ``member`` dimension): on an ensemble it runs once per
+member (:func:`member_view`) and returns its results along ``member``, with the member
+coordinates (ids, swept parameters, status), so that the result of member m equals the
+function of that member's own Dataset.
 """
 from __future__ import annotations
 
@@ -26,9 +33,13 @@ import numpy as np
 import xarray as xr
 
 from ..laws.base import cell_area_and_width, failed_length
+from .members import member_view, over_members
+from .rupture import crack_length, rupture_statistics
+from .table import summary
 
 __all__ = ["initial_front", "front_position", "mean_crack_length", "failed_length", "cell_area_and_width",
-           "front_speed", "cohesive_zone", "roughness", "structure_function"]
+           "front_speed", "cohesive_zone", "roughness", "structure_function", "crack_length",
+           "rupture_statistics", "member_view", "summary"]
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -131,6 +142,7 @@ def _ratio(data, field, delta_c):
 
 
 # ---------------------------------------------------------------------------- the front
+@over_members
 def front_position(data, *, method=None, times=None, start=None, delta_c=None, field="delta_2"):
     """Crack-front position x1_f(t, x3).
 
@@ -205,6 +217,7 @@ def _front_from_opening(data, start, delta_c, field):
     return _front_da(out, t, x3, data, "crack-front position (opening = delta_c)")
 
 
+@over_members
 def mean_crack_length(front, *, origin=0.0):
     """Mean crack length vs time: the front averaged over x3, measured from ``origin``
     (x1 = 0 by default, so that it starts at l0 for the section 4 scenes)."""
@@ -214,6 +227,7 @@ def mean_crack_length(front, *, origin=0.0):
     return out
 
 
+@over_members
 def front_speed(x, *, window=None, polyorder=2):
     """d x / d t along "t" for a front (t, x3) or a mean length (t).
 
@@ -244,6 +258,7 @@ def front_speed(x, *, window=None, polyorder=2):
     return out
 
 
+@over_members
 def cohesive_zone(data, *, delta_c=None, field="delta_2", start=None, eps=1e-3):
     """Extent along x1 of the cohesive zone ahead of the crack tip, per (t, x3): from the
     tip (opening crossing delta_c, as ``front_position(method="opening")``) to where the
@@ -275,6 +290,7 @@ def cohesive_zone(data, *, delta_c=None, field="delta_2", start=None, eps=1e-3):
 
 
 # ---------------------------------------------------------------------------- roughness
+@over_members
 def roughness(front):
     """Roughness of the front line x1_f(x3) over time: Dataset on t with ``width``
     (standard deviation along x3), ``mean`` (mean position) and ``advance`` (mean
@@ -292,6 +308,7 @@ def roughness(front):
     return ds
 
 
+@over_members
 def structure_function(front, *, max_lag=None):
     """Second-order structure function of the front along x3 (periodic):
     S(r, t) = < (x1_f(x3 + r) - x1_f(x3))^2 >_x3 for r = k dx3, k = 1 .. n3 // 2

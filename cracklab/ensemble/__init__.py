@@ -18,6 +18,9 @@ depend on the order in which parameters are given and is the same in every run.
 Store layout (one Zarr v3 store)::
 
     STORE.zarr/                  root group, attrs: cracklab_ensemble (format), study, members
+      <coordinates>              the member table: member (ids), one array per swept parameter,
+                                 status (written at the end of every sweep, with the store's
+                                 consolidated metadata: xarray.open_zarr(STORE) shows it)
       members/
         <id>/                    what ``cracklab.simulate(scene, store=...)`` writes, plus attrs
                                  member_id, member_params (JSON), member_swept (JSON),
@@ -35,6 +38,8 @@ registry), ``identity`` (canonical values, member ids, digests), ``planning`` (t
 of a sweep, one member's scene), ``store`` (paths, checks, member records, atomic
 replacement), ``lock`` (the store lock), ``running`` (dask, ``run``, the worker task),
 ``study`` (STUDY.toml), ``read`` (member_status, open_member, open_ensemble, member_scene);
+``summary`` (the table of parameters and measures per member) is computed by
+``cracklab.analysis``;
 the netCDF export is ``cracklab.output.netcdf``.
 
 See docs/ensembles.md for the STUDY.toml format and examples.
@@ -47,14 +52,24 @@ from .identity import (FORMAT, ID_LENGTH, canonical, canonical_json, coordinate_
                        scene_digest)
 from .lock import LOCK_GRACE_S, LOCK_NAME, StoreLocked, store_lock
 from .planning import SECTIONS, SEED_BITS, TOP_LEVEL, apply_paths, build_scene, plan
-from .read import UNREADABLE, member_scene, member_status, open_ensemble, open_member
+from .read import NO_INTEGER, UNREADABLE, member_scene, member_status, open_ensemble, open_member
 from .running import run
 from .spec import Builder, Member, Study, Sweep, SweepResult
-from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind
+from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind, write_member_table
 from .study import STUDY_KEYS, load_study, run_study
 
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",
            "run_study", "open_ensemble", "open_member", "member_status", "member_scene",
            "build_scene", "is_ensemble", "store_kind", "coordinate_name", "export_netcdf", "store_lock",
            "StoreLocked", "register_builder", "unregister_builder", "registered_builders",
-           "resolve_builder", "ENTRY_POINT_GROUP"]
+           "resolve_builder", "ENTRY_POINT_GROUP", "summary", "NO_INTEGER"]
+
+
+def summary(store, *, complete_only=False):
+    """Parameters and summary measures per member of the ensemble ``store`` (or of an
+    ``open_ensemble`` Dataset, or a run) as an xarray Dataset along ``member``;
+    ``.to_dataframe()`` is a tidy pandas table, one row per member. Computed by
+    :func:`cracklab.analysis.summary`, which documents the measures."""
+    from ..analysis.table import summary as table
+
+    return table(store, complete_only=complete_only)

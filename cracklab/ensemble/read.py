@@ -95,31 +95,71 @@ def open_member(store, member: str):
                                 f"names the damaged files; rerun the sweep to recompute it") from None
 
 
+NO_INTEGER = -1      # an integer parameter a member does not have (a seed of an unseeded member)
+
+
 def _coord_values(values):
-    """A 1-D coordinate array from per-member values (None where a member lacks it)."""
+    """(1-D coordinate array, extra attrs) from per-member values (None where a member lacks
+    it): booleans as bool, integers as int64 (``NO_INTEGER`` where missing), other numbers
+    as float64 (NaN where missing), anything else as text ("" where missing; lists and
+    tables as JSON)."""
     present = [v for v in values if v is not None]
-    if present and all(isinstance(v, bool) for v in present) and len(present) == len(values):
-        return np.array(values, dtype=bool)
+    full = len(present) == len(values)
+    if present and full and all(isinstance(v, bool) for v in present):
+        return np.array(values, dtype=bool), {}
     if present and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in present):
-        if all(isinstance(v, int) for v in present) and len(present) == len(values):
-            return np.array(values, dtype=np.int64)
-        return np.array([np.nan if v is None else float(v) for v in values])
+        if all(isinstance(v, int) for v in present):
+            out = np.array([NO_INTEGER if v is None else v for v in values], dtype=np.int64)
+            return out, ({} if full else {"comment": f"{NO_INTEGER}: the member does not have this parameter"})
+        return np.array([np.nan if v is None else float(v) for v in values]), {}
     return np.array(["" if v is None else (v if isinstance(v, str) else json.dumps(v)) for v in values],
-                    dtype=object)
+                    dtype=object), {}
+
+
+def swept_names(status) -> list[str]:
+    """The swept parameters of these members (``member_status`` entries), in order; plus
+    ``builder`` when they use different builders."""
+    swept = list(dict.fromkeys(k for s in status for k in s["swept"]))
+    if len({s["params"].get("builder") for s in status}) > 1 and "builder" not in swept:
+        swept.append("builder")
+    return swept
+
+
+def member_coords(status, swept=None) -> dict:
+    """The coordinates along ``member`` of these members (``member_status`` entries): the
+    ids (``member``), one per swept parameter in its own type (see ``open_ensemble``) and
+    ``status``."""
+    swept = swept_names(status) if swept is None else swept
+    coords = {"member": ("member", np.array([s["id"] for s in status], dtype=object),
+                         {"long_name": "ensemble member id"})}
+    for name in swept:
+        values, extra = _coord_values([s["params"].get(name) for s in status])
+        coords[coordinate_name(name)] = ("member", values,
+                                         {"long_name": f"swept parameter {name}", "parameter": name, **extra})
+    coords["status"] = ("member", np.array([str(s["status"]) for s in status], dtype=object),
+                        {"long_name": "status of the member's run (complete, failed, running, damaged)"})
+    return coords
 
 
 def open_ensemble(store, *, members=None, complete_only=True, tree=False):
     """The ensemble as one lazily loaded xarray Dataset with a ``member`` dimension.
 
-    Coordinates along ``member``: the member ids (``member``), every swept parameter
-    (dots in names become underscores: law.tau_c -> law_tau_c; a member without the
-    parameter has NaN, or "" for strings), ``scene_name`` and ``scene`` (the member's
-    scene as JSON, see ``member_scene``). Members on different grids or snapshot times are
-    aligned by an outer join (the union of the coordinates, NaN where a member has no
-    value). With ``tree=True`` a DataTree /members/<id> is returned instead (no padding).
-    Only complete members are read unless ``complete_only=False``; ``members``: only
-    these ids (e.g. ``[m.id for m in result.members]`` of one sweep). Ready for
-    ``ds.groupby("contrast")`` and ``ds.set_xindex("diameter").sel(diameter=...)``."""
+    Coordinates along ``member``: the member ids (``member``), one per swept parameter in
+    its own type (dots in names become underscores: law.tau_c -> law_tau_c; attr
+    ``parameter`` keeps the name): integers (seeds included) as int64, other numbers as
+    float64, booleans as bool, text as str; a member without the parameter has NaN, -1
+    for an integer (``NO_INTEGER``), "" for text. Then ``status`` (complete, or the
+    status of a member read with ``complete_only=False``) and ``scene_name``. The scenes
+    are not coordinates: attr ``scenes`` holds them (JSON {id: scene}; ``member_scene``
+    rebuilds one). So ``crack_length(ens).isel(t=-1).to_dataframe()`` is a tidy table.
+
+    Members on different grids or snapshot times are aligned by an outer join (the union
+    of the coordinates, NaN where a member has no value). With ``tree=True`` a DataTree is
+    returned instead: the member coordinates at its root, one node /members/<id> per
+    member (no padding). Only complete members are read unless ``complete_only=False``;
+    ``members``: only these ids (e.g. ``[m.id for m in result.members]`` of one sweep).
+    Ready for ``ds.groupby("contrast")`` and ``ds.set_xindex("diameter").sel(diameter=...)``;
+    every function of ``cracklab.analysis`` takes it (one result per member)."""
     import xarray as xr
 
     store = store_str(store)
@@ -140,10 +180,7 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
     if not status:
         raise InputError("store", f"{store} holds no complete members")
     root_attrs = dict(open_group(store, "r").attrs)
-    swept = list(dict.fromkeys(k for s in status for k in s["swept"]))
-    if len({s["params"].get("builder") for s in status}) > 1 and "builder" not in swept:
-        swept.append("builder")
-    datasets, scenes, names, kept = [], [], [], []
+    datasets, scenes, kept = [], [], []
     for s in status:
         try:
             ds = open_member(store, s["id"])
@@ -155,20 +192,25 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
             continue                    # rewritten since it was listed: the group read is not complete
         kept.append(s)
         scene_json = ds.attrs.get("scene", "{}")
-        try:
-            name = json.loads(scene_json).get("name", "")
-        except ValueError:
-            name = ""
         scenes.append(scene_json)
-        names.append(name)
         ds = _with_input_coords(ds, scene_json)
         ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("Conventions", "source", "cracklab_version")}
         datasets.append(ds)
     status = kept
     if not status:
         raise InputError("store", f"{store} holds no complete members")
+    swept = swept_names(status)
+    coords = member_coords(status, swept)
+    names = []
+    for text in scenes:
+        try:
+            names.append(str(json.loads(text).get("name", "")))
+        except (ValueError, AttributeError):
+            names.append("")
+    coords["scene_name"] = ("member", np.array(names, dtype=object), {"long_name": "scene name"})
+    attrs = {**_ensemble_attrs(root_attrs, store), "swept": json.dumps(swept), "scenes": _scenes_attr(status, scenes)}
     if tree:
-        nodes = {"/": xr.Dataset(attrs=_ensemble_attrs(root_attrs, store))}
+        nodes = {"/": xr.Dataset(coords=coords, attrs=attrs)}
         for s, ds, text in zip(status, datasets, scenes):
             nodes[f"/{MEMBERS}/{s['id']}"] = ds.assign_attrs(scene=text, member_id=s["id"],
                                                              member_params=canonical_json(s["params"]))
@@ -180,19 +222,35 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
         raise StoreError(store, f"its members cannot be combined ({error_line(exc)}); a member is probably "
                                 f"damaged: cracklab verify {store} names the files, and rerunning the sweep "
                                 f"recomputes damaged members") from None
-    coords = {"member": ("member", np.array([s["id"] for s in status], dtype=object),
-                         {"long_name": "ensemble member id"}),
-              "scene": ("member", np.array(scenes, dtype=object),
-                        {"long_name": "the member's scene as JSON (cracklab.ensemble.member_scene)"}),
-              "scene_name": ("member", np.array(names, dtype=object), {"long_name": "scene name"})}
-    for name in swept:
-        values = [s["params"].get(name) for s in status]
-        coords[coordinate_name(name)] = ("member", _coord_values(values),
-                                         {"long_name": f"swept parameter {name}", "parameter": name})
     ens = ens.assign_coords(coords)
-    ens.attrs.update(_ensemble_attrs(root_attrs, store))
-    ens.attrs["swept"] = json.dumps(swept)
+    ens.attrs.update(attrs)
     return ens
+
+
+def _scenes_attr(status, scenes) -> str:
+    """The ``scenes`` attr of an ensemble: JSON {member id: the member's scene (its JSON form)}."""
+    out = {}
+    for s, text in zip(status, scenes):
+        try:
+            out[s["id"]] = json.loads(text)
+        except ValueError:
+            out[s["id"]] = {}
+    return json.dumps(out, sort_keys=False, separators=(",", ":"))
+
+
+def scene_text(ens, member=None) -> str:
+    """The scene JSON of one member of an ``open_ensemble`` Dataset (``member``: its id), or
+    of a single run's Dataset (its ``scene`` attr); "{}" when there is none."""
+    if member is None and "member" in ens.coords and ens["member"].ndim == 0:
+        member = ens["member"].item()
+    if member is not None and "scenes" in ens.attrs:
+        scene = json.loads(ens.attrs["scenes"]).get(str(member))
+        if scene is not None:
+            return json.dumps(scene)
+    if member is not None and "scene" in ens.coords:         # a netCDF file of an older cracklab
+        da = ens["scene"]
+        return str(da.sel(member=member).item() if "member" in da.dims else da.item())
+    return ens.attrs.get("scene", "{}")
 
 
 def _with_input_coords(ds, scene_json):
@@ -222,12 +280,14 @@ def _ensemble_attrs(root_attrs, store):
 
 
 def member_scene(ens, member):
-    """The Scene of one member of an ``open_ensemble`` Dataset (or of any Dataset with a
-    ``scene`` attr or coordinate)."""
+    """The Scene of one member of an ``open_ensemble`` Dataset (its ``scenes`` attr), or of
+    any Dataset with a ``scene`` attr."""
     from ..model.scene_io import scene_from_data
 
     ds = ens.sel(member=member) if "member" in ens.dims else ens
-    text = ds["scene"].item() if "scene" in ds.coords else ds.attrs["scene"]
+    text = scene_text(ens, member if "member" in ens.dims else None)
+    if text == "{}":
+        raise InputError("member", f"no scene of member {member!r} in this Dataset")
     arrays = {}
     for n in ds.data_vars:
         if n.startswith("input_"):

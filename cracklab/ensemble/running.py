@@ -18,7 +18,7 @@ from .planning import as_sweep, build_scene, plan
 from .spec import Builder, Member, Sweep, SweepResult
 from .store import (MEMBERS, SWAP_TAG, check_store, damage_of, error_line, init_store, is_complete,
                     member_attrs, member_path, open_group, record_failure, store_str, swap_in,
-                    traceback_summary)
+                    traceback_summary, write_member_table)
 
 
 def cores() -> int:
@@ -138,7 +138,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         if progress and client is None:
             address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
             n = max(1, min(workers or cores(), len(todo)))
-            print(f"cracklab: {len(todo)} members to run; " +
+            print(f"cracklab: {len(todo)} member{'s' if len(todo) != 1 else ''} to run; " +
                   (f"connecting to {address}" if address else
                    f"starting a local cluster of {n} worker process{'es' if n > 1 else ''}"),
                   file=sys.stderr, flush=True)
@@ -180,6 +180,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
     open_group(store, "a").update_attributes({"last_run": json.dumps({
         "members": len(members), "ran": len(todo), "skipped": len(result.skipped),
         "failed": result.failed, "damaged": result.damaged, "elapsed_s": round(result.elapsed, 3)})})
+    write_member_table(store)          # and the store's consolidated metadata, last
     return result
 
 

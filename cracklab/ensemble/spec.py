@@ -76,7 +76,8 @@ class SweepResult:
         return not self.failed
 
     def summary(self) -> str:
-        lines = [f"{len(self.members)} members: {len(self.ran) - len(self.failed)} ran, "
+        n = len(self.members)
+        lines = [f"{n} member{'s' if n != 1 else ''}: {len(self.ran) - len(self.failed)} ran, "
                  f"{len(self.skipped)} already complete, {len(self.failed)} failed "
                  f"({self.elapsed:.1f} s) -> {self.store}"]
         by_id = {m.id: m for m in self.members}

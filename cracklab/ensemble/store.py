@@ -8,6 +8,7 @@ import json
 import os
 import shutil
 import traceback
+import warnings
 from pathlib import Path
 
 from ..errors import InputError, StoreError
@@ -32,12 +33,27 @@ def member_path(store, mid: str) -> str:
     return f"{store_str(store)}/{MEMBERS}/{mid}"
 
 
-def open_group(path, mode):
-    """The Zarr group at ``path``; created as Zarr v3 in a writing mode."""
+def open_group(path, mode, *, consolidated=None):
+    """The Zarr group at ``path``; created as Zarr v3 in a writing mode. Read ("r") from its
+    own metadata, never from consolidated metadata (which a running sweep may have made
+    stale). ``consolidated=False`` in a writing mode: the group's next metadata write
+    drops its consolidated metadata."""
     import zarr
 
-    return zarr.open_group(path, mode=mode, zarr_format=3) if mode in ("w", "a", "w-") else \
-        zarr.open_group(path, mode=mode)
+    if mode in ("w", "a", "w-"):
+        return zarr.open_group(path, mode=mode, zarr_format=3, use_consolidated=consolidated)
+    return zarr.open_group(path, mode=mode, use_consolidated=False)
+
+
+def consolidate(path):
+    """Write the consolidated metadata of the group at ``path`` and everything below it
+    into its zarr.json, where ``xarray.open_zarr`` and ``open_datatree`` look first (zarr's
+    warning that Zarr v3 does not standardise it yet is silenced)."""
+    import zarr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        zarr.consolidate_metadata(path)
 
 
 def is_ensemble(store) -> bool:
@@ -99,7 +115,7 @@ def check_store(store: str):
         if p.exists() and not p.is_dir():
             raise InputError("store", f"{store} is a file, not a Zarr store; choose another path")
     try:
-        root = zarr.open_group(store, mode="r")
+        root = zarr.open_group(store, mode="r", use_consolidated=False)
     except Exception:  # noqa: BLE001 - no group there (yet)
         root = None
     if root is None:
@@ -123,7 +139,7 @@ def check_store(store: str):
 def init_store(store: str, study_spec: dict, members: list[Member], axes=()):
     """Create (or reopen) the root group and members/; record the study and member order."""
     check_store(store)
-    root = open_group(store, "a")
+    root = open_group(store, "a", consolidated=False)   # the consolidated metadata goes until the sweep ends
     old = list(root.attrs.get("members", []))
     ids = old + [m.id for m in members if m.id not in set(old)]
     root.update_attributes({
@@ -151,7 +167,7 @@ def member_attrs(store, mid):
     import zarr
 
     try:
-        return dict(zarr.open_group(member_path(store, mid), mode="r").attrs)
+        return dict(zarr.open_group(member_path(store, mid), mode="r", use_consolidated=False).attrs)
     except Exception:  # noqa: BLE001 - missing or unreadable group
         return None
 
@@ -240,3 +256,36 @@ def swap_in(new: str, path: str):
     os.rename(path, old)
     os.rename(new, path)
     shutil.rmtree(old, ignore_errors=True)
+
+
+# ---------------------------------------------------------------------------- the member table
+def write_member_table(store: str):
+    """The member table at the root of the store, then the store's consolidated metadata:
+    one array per coordinate along ``member`` (ids, swept parameters, status; as
+    ``open_ensemble`` gives them), so that ``xarray.open_zarr(STORE)`` shows the members and
+    their parameters as coordinates, and ``xarray.open_datatree(STORE)`` opens the whole
+    store from its consolidated metadata. Written at the end of every sweep (local or
+    URL stores alike); the root's attrs are kept."""
+    import xarray as xr
+
+    from ..output.checkpoint import encoding
+    from .read import member_coords, member_status
+
+    status = member_status(store)
+    with warnings.catch_warnings():     # the sweep's lock file is not a Zarr node: zarr says so when listing
+        warnings.filterwarnings("ignore", message=".*not recognized as a component of a Zarr hierarchy")
+        root = open_group(store, "a", consolidated=False)
+        attrs = {k: v for k, v in root.attrs.items() if k != "coordinates"}
+        old = str(root.attrs.get("coordinates", "")).split() + ["member"]
+        for name in old:                # the previous table
+            if name in root and name != MEMBERS:
+                del root[name]
+        if status:
+            coords = member_coords(status)
+            table = xr.Dataset(coords=coords, attrs=attrs)
+            table.to_zarr(store, mode="a", consolidated=False, zarr_format=3, encoding=encoding(table))
+            names = " ".join(c for c in coords if c != "member")
+            open_group(store, "a", consolidated=False).update_attributes({**attrs, "coordinates": names})
+        else:
+            open_group(store, "a", consolidated=False).attrs.put(attrs)
+        consolidate(store)

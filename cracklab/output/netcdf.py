@@ -44,10 +44,51 @@ def _nc_attrs(attrs):
     return out
 
 
+TIME_UNITS = ("s", "ms", "us", "min", "h", "d", "second", "seconds", "minute", "minutes", "hour", "hours",
+              "day", "days")
+CHUNK_BYTES = 4 << 20          # netCDF chunks of at most 4 MB
+COMPLEVEL = 4
+SMALL_BYTES = 1 << 10
+
+
+def _cf_clean(ds):
+    """CF conventions the Zarr store does not need: ``standard_name: time`` only on a time
+    in time units (a dimensionless run's t has units "1"), and coordinate values on every
+    dimension (input_x1 and input_x3 from the scene's grid, else the node index)."""
+    for name, var in ds.variables.items():
+        if var.attrs.get("standard_name") == "time" and str(var.attrs.get("units", "")).split(" ")[0] not in TIME_UNITS:
+            del var.attrs["standard_name"]
+    from ..ensemble.read import _with_input_coords
+
+    ds = _with_input_coords(ds, ds.attrs.get("scene", "{}"))
+    missing = {d: (d, np.arange(ds.sizes[d]), {"long_name": f"index along {d}"}) for d in ds.dims
+               if d not in ds.coords}
+    return ds.assign_coords(missing) if missing else ds
+
+
+def encoding(ds) -> dict:
+    """netCDF4 encodings: zlib (level 4; no shuffle, which made the fields larger) in
+    chunks of at most ``CHUNK_BYTES`` (whole trailing dimensions, leading ones cut first)
+    for every numeric variable of ``SMALL_BYTES`` or more."""
+    out = {}
+    for name, var in ds.variables.items():
+        if var.dtype.kind not in "biuf" or var.ndim == 0 or var.size * var.dtype.itemsize < SMALL_BYTES:
+            continue                # small: stored contiguous (a chunked layout costs more than it saves)
+        chunks = list(var.shape)
+        for axis in range(var.ndim - 1):
+            if int(np.prod(chunks)) * var.dtype.itemsize <= CHUNK_BYTES:
+                break
+            chunks[axis] = max(1, int(CHUNK_BYTES // (var.dtype.itemsize * int(np.prod(chunks[axis + 1:])))))
+        out[name] = {"zlib": True, "complevel": COMPLEVEL, "shuffle": False,
+                     "chunksizes": tuple(max(1, c) for c in chunks)}
+    return out
+
+
 def netcdf_ready(ds):
-    """A copy of ``ds`` that netCDF4 can store: Zarr encodings dropped, attrs made netCDF
-    types, string and object arrays as plain str."""
-    ds = ds.copy()
+    """A copy of ``ds`` that netCDF4 can store and that follows the CF conventions: Zarr
+    encodings dropped, attrs made netCDF types, string and object arrays as plain str,
+    coordinates on every dimension and ``standard_name`` time only in time units."""
+    ds = _cf_clean(ds.copy())
     strings = {}
     for name, var in ds.variables.items():
         var.encoding = {}
@@ -84,7 +125,8 @@ def _read_error(store, exc) -> StoreError:
 
 def export_netcdf(store, out, *, member=None):
     """Write a run's store, one member of an ensemble (``member`` id), or the whole
-    ensemble (``open_ensemble``) to the netCDF4 file ``out``; returns its path."""
+    ensemble (``open_ensemble``) to the netCDF4 file ``out``, compressed (zlib with
+    chunking, ``encoding``) and CF-clean (``netcdf_ready``); returns its path."""
     import xarray as xr
 
     from ..ensemble.read import member_status, open_ensemble, open_member
@@ -117,5 +159,5 @@ def export_netcdf(store, out, *, member=None):
     ds = netcdf_ready(ds)
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    ds.to_netcdf(out, engine="netcdf4", format="NETCDF4")
+    ds.to_netcdf(out, engine="netcdf4", format="NETCDF4", encoding=encoding(ds))
     return out

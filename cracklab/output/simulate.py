@@ -107,7 +107,8 @@ class Recorder:
     def _coords(self, t):
         u = self.scene.units
         return {
-            "t": ("t", t if t is not None else np.zeros(0), {"units": u["time"], "long_name": "time", "axis": "T", "standard_name": "time"}),
+            "t": ("t", t if t is not None else np.zeros(0), {"units": u["time"], "long_name": "time", "axis": "T",
+                                                              **({"standard_name": "time"} if u["time"] != "1" else {})}),
             "x1": ("x1", self.x1, {"units": u["length"], "long_name": "distance along x1", "axis": "X"}),
             "x3": ("x3", self.x3, {"units": u["length"], "long_name": "distance along x3", "axis": "Y"}),
         }
@@ -259,6 +260,9 @@ class Recorder:
             # last: a kill or a full disk before this leaves a store that is not complete
             self._store_op("marking the store complete" if not error else "marking the store failed",
                            group.attrs.put, final)
+            # then its consolidated metadata, where xarray.open_zarr looks first (no warning)
+            self._store_op("consolidating the store's metadata", _consolidate,
+                           str(self.path) if self.path is not None else self.store)
             if self.path is not None:
                 checkpoint.remove(self.path)
             return xr.open_zarr(self.store, consolidated=False)
@@ -269,6 +273,16 @@ class Recorder:
         ds = xr.merge([ds, extra], combine_attrs="override")
         ds.attrs = self.global_attrs()
         return ds
+
+
+def _consolidate(store):
+    """The consolidated metadata of a finished run's group (zarr's warning that Zarr v3 does
+    not standardise it yet silenced)."""
+    import zarr
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        zarr.consolidate_metadata(store)
 
 
 CHECKPOINT_SECONDS = 60.0

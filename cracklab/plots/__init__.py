@@ -24,10 +24,12 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from ..analysis import cell_area_and_width, failed_length
+from ..analysis import crack_length, member_view
+from ..analysis.members import trim_padding
+from ..analysis.rupture import member_scenes, scene_dict
 
 __all__ = ["snapshot", "rupture_contours", "crack_length", "crack_length_plot", "ensemble_summary",
-           "ensemble_panels", "animate", "summary_figures"]
+           "ensemble_panels", "animate", "summary_figures", "parameter_label", "plural"]
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -37,57 +39,63 @@ def _plt():
     return plt
 
 
+def plural(n: int, word: str) -> str:
+    """"1 member", "2 members"."""
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
 def _member(ds, member=None):
-    """One member of an ensemble Dataset (the Dataset itself for a run)."""
+    """One member of an ensemble Dataset as a run (the Dataset itself for a run)."""
     if "member" not in ds.dims:
         return ds
     if member is None:
         if ds.sizes["member"] != 1:
-            raise ValueError(f"this is an ensemble of {ds.sizes['member']} members: give member= "
+            raise ValueError(f"this is an ensemble of {plural(ds.sizes['member'], 'member')}: give member= "
                              f"(an id, e.g. {str(ds.member.values[0])!r}, or a position)")
-        return _trim(ds.isel(member=0))
-    if isinstance(member, (int, np.integer)) and not isinstance(member, bool):
-        return _trim(ds.isel(member=int(member)))
-    return _trim(ds.sel(member=member))
+        member = 0
+    return member_view(ds, member)
 
 
 def _trim(ds):
-    """Drop the NaN padding an outer join (open_ensemble) left on t, x1, x3 for this member:
-    the positions where its first recorded field is NaN throughout."""
-    fields = [v for v in ds.data_vars if {"t", "x1", "x3"} <= set(ds[v].dims) and ds[v].dtype.kind == "f"]
-    if not fields or ds.sizes.get("t", 0) == 0:
-        return ds
-    ok = ds[fields[0]].notnull()
-    keep = {}
-    for dim in ("t", "x1", "x3"):
-        k = ok.any([d for d in ok.dims if d != dim]).values
-        if k.any() and not k.all():
-            keep[dim] = np.nonzero(k)[0]
-    return ds.isel(keep) if keep else ds
+    """Drop the NaN padding an outer join (open_ensemble) left on this member."""
+    return trim_padding(ds)
 
 
 def _scene_data(ds) -> dict:
-    text = None
-    if "scene" in ds.coords and ds["scene"].ndim == 0:
-        text = ds["scene"].item()
-    elif "scene" in ds.attrs:
-        text = ds.attrs["scene"]
-    try:
-        return json.loads(text) if text else {}
-    except ValueError:
-        return {}
+    return scene_dict(ds)
 
 
 def _scene_list(ds) -> list[dict]:
     """Scene dicts per member (a list of one for a run)."""
-    if "member" in ds.dims:
-        if "scene" in ds.coords and ds["scene"].ndim == 1:
-            return [json.loads(s) if s else {} for s in ds["scene"].values]
-        return [_scene_data(ds)] * ds.sizes["member"]
-    return [_scene_data(ds)]
+    return member_scenes(ds)
+
+
+GREEK = {"tau": r"\tau", "delta": r"\delta", "mu": r"\mu", "sigma": r"\sigma", "theta": r"\theta",
+         "beta": r"\beta", "nu": r"\nu", "eta": r"\eta", "psi": r"\psi", "alpha": r"\alpha"}
+
+
+def parameter_label(ds, name, *, units=True) -> str:
+    """A swept parameter in plain words for legends and axes: its key without the scene
+    section (``law_delta_c`` -> delta_c, written as the symbol), other underscores as
+    spaces, and its units when the coordinate has them."""
+    import re
+
+    var = ds[name] if name in ds.coords else None
+    param = var.attrs.get("parameter", name) if var is not None else name
+    key = str(param).rsplit(".", 1)[-1]
+    head, _, sub = key.partition("_")
+    m = re.fullmatch(r"([a-z]+?)(\d*)", head)
+    if m and m.group(1) in GREEK:
+        text = "$" + GREEK[m.group(1)] + (f"^{{{m.group(2)}}}" if m.group(2) else "") + \
+            (f"_{{{sub.replace('_', ',')}}}" if sub else "") + "$"
+    else:
+        text = key.replace("_", " ")
+    u = var.attrs.get("units") if var is not None else None
+    return f"{text} [{u}]" if units and u and u != "1" else text
 
 
 def _label(ds, name):
+    """"long name [units]" of a variable or coordinate (its name without a long name)."""
     var = ds[name]
     long_name = var.attrs.get("long_name", name)
     units = var.attrs.get("units")
@@ -115,17 +123,19 @@ def _extent(ds):
     return ds["x1"].values, ds["x3"].values
 
 
+def _is_plane(ds) -> bool:
+    """The plane problem (n3 = 1): fields are lines along x1."""
+    return ds.sizes.get("x3", 0) == 1
+
+
 def _plane_image(ax, ds, values, *, cmap, vmin=None, vmax=None, norm=None):
-    """pcolormesh of an (x1, x3) array with x1 across, x3 up, equal aspect."""
+    """pcolormesh of an (x1, x3) array with x1 across, x3 up, equal aspect (3D grids)."""
     x1, x3 = _extent(ds)
-    if len(x3) == 1:   # plane problem: a strip
-        x3 = np.array([0.0, 1.0])
-        values = np.repeat(values, 2, axis=1)
     mesh = ax.pcolormesh(x1, x3, np.asarray(values).T, cmap=cmap, vmin=vmin, vmax=vmax, norm=norm,
                          shading="nearest", rasterized=True)
     ax.set_aspect("equal")
-    ax.set_xlabel(_label(ds, "x1") if "long_name" in ds["x1"].attrs else "x1")
-    ax.set_ylabel(_label(ds, "x3") if "long_name" in ds["x3"].attrs else "x3")
+    ax.set_xlabel(_label(ds, "x1"))
+    ax.set_ylabel(_label(ds, "x3"))
     return mesh
 
 
@@ -144,9 +154,22 @@ def _cmap_for(field):
     return "RdBu_r" if field.startswith(("tau", "v_")) else "viridis"
 
 
+def _limits(values, field, robust, lo=2.0, hi=98.0):
+    """Colour (or y) limits of a field: percentiles with ``robust``, symmetric about 0 for
+    tractions and rates; None, None otherwise (the data's own range)."""
+    if not robust:
+        return None, None
+    vmin, vmax = _robust(values, lo, hi)
+    if field.startswith(("tau", "v_")):
+        m = max(abs(vmin), abs(vmax))
+        vmin, vmax = -m, m
+    return vmin, vmax
+
+
 # ---------------------------------------------------------------------------- one run
 def snapshot(ds, field="delta_2", *, t=None, member=None, ax=None, path=None, cmap=None, robust=True):
-    """``field`` over the plane at the snapshot nearest ``t`` (default: the last)."""
+    """``field`` over the plane at the snapshot nearest ``t`` (default: the last); in the
+    plane problem (n3 = 1) a line along x1."""
     d = _member(ds, member)
     if field not in d:
         raise ValueError(f"no field {field!r} in this result; recorded: "
@@ -158,128 +181,125 @@ def snapshot(ds, field="delta_2", *, t=None, member=None, ax=None, path=None, cm
         da = da.isel(t=-1) if t is None else da.sel(t=t, method="nearest")
     values = da.transpose("x1", "x3").values
     fig, ax = _axes(ax)
-    vmin, vmax = _robust(values) if robust else (None, None)
-    if field.startswith(("tau", "v_")) and robust:
-        m = max(abs(vmin), abs(vmax))
-        vmin, vmax = -m, m
-    mesh = _plane_image(ax, d, values, cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
-    fig.colorbar(mesh, ax=ax, label=_label(d, field), shrink=0.9)
+    if _is_plane(d):
+        ax.plot(d["x1"].values, values[:, 0], color="C0", lw=1.5)
+        ax.set_xlabel(_label(d, "x1"))
+        ax.set_ylabel(_label(d, field))
+        ax.grid(alpha=0.3)
+    else:
+        vmin, vmax = _limits(values, field, robust)
+        mesh = _plane_image(ax, d, values, cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
+        fig.colorbar(mesh, ax=ax, label=_label(d, field), shrink=0.9)
     when = f" at t = {float(da['t']):.3g}" if "t" in da.coords else ""
     ax.set_title(f"{d[field].attrs.get('long_name', field)}{when}")
     return _finish(fig, path)
 
 
+FAILED_EDGE = "edge of the ruptured region"
+
+
+def _background(d, shape):
+    """The scene's varying toughness (tau_c, else delta_c) on the recorded plane, or None."""
+    for name in ("input_law_tau_c", "input_law_delta_c"):
+        if name in d:
+            bg = d[name]
+            values = np.asarray(bg.values, dtype=float)
+            if values.shape == shape and np.isfinite(values).any() and np.nanmax(values) > np.nanmin(values):
+                return bg, values
+    return None, None
+
+
 def rupture_contours(ds, *, member=None, levels=10, ax=None, path=None, background=True, title=None,
                      colorbar=True):
-    """Contours of ``rupture_time`` (the crack front every so often); with ``background``
-    over the scene's tau_c field when it varies (asperities, random toughness)."""
+    """Contours of ``rupture_time`` (the crack front every so often) and, in black, the edge
+    of the region that ruptured; with ``background`` over the scene's tau_c field when it
+    varies (asperities, random toughness), in greys over that field's own range. In the
+    plane problem (n3 = 1): rupture time against x1, tau_c on a second axis."""
+    from matplotlib.colors import ListedColormap
+
+    plt = _plt()
     d = _member(ds, member)
     rt = d["rupture_time"].transpose("x1", "x3")
-    fig, ax = _axes(ax)
-    bg = None
-    if background:
-        for name in ("input_law_tau_c", "input_law_delta_c"):
-            if name in d:
-                bg = d[name]
-                break
-    if bg is not None:
-        bgv = bg.transpose(*[x for x in bg.dims]).values
-        if bgv.shape == rt.shape:
-            lo, hi = float(np.nanmin(bgv)), float(np.nanmax(bgv))
-            mesh = _plane_image(ax, d, bgv, cmap="Greys", vmin=lo - 0.15 * (hi - lo + 1e-12),
-                                vmax=hi + 1.2 * (hi - lo + 1e-12))
-            if colorbar:
-                key = bg.name[len("input_law_"):]
-                fig.colorbar(mesh, ax=ax, label=f"{key} (background)", shrink=0.8, pad=0.01)
     values = rt.values
+    fig, ax = _axes(ax)
+    bg, bgv = _background(d, rt.shape) if background else (None, None)
     x1, x3 = _extent(d)
     finite = np.isfinite(values)
+    bg_label = None
+    if bg is not None:
+        bg_label = _label(d, bg.name).replace("scene input law.", "")
+    if _is_plane(d):
+        if finite.any():
+            ax.plot(x1, values[:, 0], "k-", lw=1.5, label="rupture time")
+        else:
+            ax.text(0.5, 0.5, "nothing ruptured", transform=ax.transAxes, ha="center")
+        ax.set_xlabel(_label(d, "x1"))
+        ax.set_ylabel(_label(d, "rupture_time"))
+        ax.grid(alpha=0.3)
+        if bg is not None:
+            twin = ax.twinx()
+            twin.plot(x1, bgv[:, 0], color="0.55", lw=1.2)
+            twin.set_ylabel(bg_label, color="0.4")
+        ax.set_title(title or "rupture time")
+        return _finish(fig, path)
+    if bg is not None:
+        lo, hi = float(np.nanmin(bgv)), float(np.nanmax(bgv))
+        greys = ListedColormap(plt.get_cmap("Greys")(np.linspace(0.05, 0.45, 256)))   # light: contours stay visible
+        mesh = _plane_image(ax, d, bgv, cmap=greys, vmin=lo, vmax=hi)
+        if colorbar:
+            fig.colorbar(mesh, ax=ax, label=bg_label, shrink=0.8, pad=0.01)
     if not finite.any():
         ax.text(0.5, 0.5, "nothing ruptured", transform=ax.transAxes, ha="center")
     else:
-        tmax = float(np.nanmax(values))
+        tmax = float(np.max(values[finite]))
         if np.isscalar(levels) or isinstance(levels, int):
             lv = np.linspace(0.0, tmax, int(levels) + 1)[1:] if tmax > 0 else [tmax]
         else:
             lv = np.asarray(levels)
-        if len(x3) == 1:
-            ax.plot(x1, values[:, 0], "k-")
-            ax.set_xlabel("x1")
-            ax.set_ylabel("rupture time")
-        else:
-            filled = np.where(finite, values, np.nanmax(values) * 10 + 1.0)
-            from matplotlib.colors import ListedColormap
-
-            lv = np.unique(np.asarray(lv, dtype=float))
-            lv = lv[(lv > np.nanmin(values)) & (lv <= np.nanmax(values))]
-            if lv.size:
-                cmap = ListedColormap(_plt().get_cmap("plasma")(np.linspace(0.0, 0.85, 256)))
-                cs = ax.contour(x1, x3, filled.T, levels=lv, cmap=cmap, vmin=0.0, vmax=float(np.max(lv)),
-                                linewidths=1.0)
-                if colorbar:
-                    fig.colorbar(cs, ax=ax, label=_label(d, "rupture_time"), shrink=0.8)
+        filled = np.where(finite, values, tmax * 10 + 1.0)
+        lv = np.unique(np.asarray(lv, dtype=float))
+        lv = lv[(lv > float(np.min(values[finite]))) & (lv <= tmax)]
+        if lv.size:
+            cmap = ListedColormap(plt.get_cmap("plasma")(np.linspace(0.0, 0.85, 256)))
+            cs = ax.contour(x1, x3, filled.T, levels=lv, cmap=cmap, vmin=0.0, vmax=float(np.max(lv)),
+                            linewidths=1.0)
+            if colorbar:
+                fig.colorbar(cs, ax=ax, label=_label(d, "rupture_time"), shrink=0.8)
+        if not finite.all():
             ax.contour(x1, x3, finite.T.astype(float), levels=[0.5], colors="k", linewidths=1.4)
-            ax.set_aspect("equal")
-            ax.set_xlabel("x1")
-            ax.set_ylabel("x3")
-    ax.set_title(title or "rupture time contours (black: ruptured region)")
+    ax.set_aspect("equal")
+    ax.set_xlabel(_label(d, "x1"))
+    ax.set_ylabel(_label(d, "x3"))
+    ax.set_title(title or f"rupture time contours (black: {FAILED_EDGE})")
     return _finish(fig, path)
 
 
-def crack_length(ds, t=None, *, n=256) -> xr.DataArray:
-    """Mean crack length l(t) = (area where rupture_time <= t) / L3 (the plane's extent
-    along x3; in the plane problem, the length that failed). ``t``: times (default ``n``
-    points from 0 to the largest t_end). For an ensemble the result is (member, t)."""
-    scenes = _scene_list(ds)
-    rt = ds["rupture_time"]
-    if t is None:
-        t_end = max([float(s.get("t_end", np.nan)) for s in scenes if s] or [np.nan])
-        if not math.isfinite(t_end):
-            t_end = float(np.nanmax(rt.values)) if np.isfinite(rt.values).any() else 1.0
-        t = np.linspace(0.0, t_end, n)
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    units = rt.attrs.get("units", "1")
-    length_units = ds["x1"].attrs.get("units", "1") if "x1" in ds.coords else "1"
-
-    def one(values, scene):
-        area, width = _cell_area_and_width(ds, scene)
-        v = np.sort(values[np.isfinite(values)].ravel())
-        return failed_length(np.searchsorted(v, t, side="right"), area, width)  # failed cells at each t
-
-    attrs = {"long_name": "mean crack length (ruptured area / L3)", "units": length_units}
-    tc = ("t", t, {"long_name": "time", "units": units})
-    if "member" in rt.dims:
-        out = np.stack([one(rt.isel(member=i).values, scenes[i]) for i in range(rt.sizes["member"])])
-        coords = {k: v for k, v in rt.coords.items() if v.dims == ("member",)}
-        return xr.DataArray(out, dims=("member", "t"), coords={**coords, "t": tc}, name="crack_length",
-                            attrs=attrs)
-    return xr.DataArray(one(rt.values, scenes[0]), dims=("t",), coords={"t": tc}, name="crack_length",
-                        attrs=attrs)
-
-
-def _cell_area_and_width(ds, scene) -> tuple[float, float]:
-    """The cell area and the width across the crack (:func:`cracklab.analysis.cell_area_and_width`)
-    of the scene's grid; without one, of the recorded coordinates: dx1 and the number of
-    nodes along x3 (the width in units of dx3)."""
-    from ..errors import InputError
-    from ..model.grid import Grid
-
-    g = scene.get("grid", {})
-    if {"n1", "n3", "L1", "L3"} <= set(g):
-        try:
-            return cell_area_and_width(Grid(n1=g["n1"], n3=g["n3"], L1=g["L1"], L3=g["L3"]))
-        except (InputError, TypeError):
-            pass
-    x1, x3 = ds["x1"].values, ds["x3"].values
-    dx1 = float(np.median(np.diff(x1))) if len(x1) > 1 else 1.0
-    return dx1, float(len(x3) if len(x3) > 1 else 1)
-
-
 def _numeric_coord(ds, name):
+    """A numeric coordinate as floats (NaN where a member lacks it), None if not numeric."""
+    from ..ensemble.read import NO_INTEGER
+
     if name is None or name not in ds.coords:
         return None
     v = ds[name].values
-    return v.astype(float) if v.dtype.kind in "iuf" else None
+    if v.dtype.kind not in "iuf":
+        return None
+    out = v.astype(float)
+    if v.dtype.kind in "iu" and str(ds[name].attrs.get("comment", "")).startswith(f"{NO_INTEGER}:"):
+        out[v == NO_INTEGER] = np.nan
+    return out
+
+
+def _value_label(ds, name, value) -> str:
+    """"symbol = value units" of a parameter's value, for legends and titles."""
+    u = ds[name].attrs.get("units") if name in ds.coords else None
+    v = f"{value:.3g}" if isinstance(value, (float, np.floating)) else str(value)
+    return f"{parameter_label(ds, name, units=False)} = {v}" + (f" {u}" if u and u != "1" else "")
+
+
+def _da_label(da) -> str:
+    units = da.attrs.get("units")
+    name = da.attrs.get("long_name", da.name)
+    return f"{name} [{units}]" if units and units != "1" else str(name)
 
 
 def _member_label(ens, i, skip=()):
@@ -294,7 +314,7 @@ def _member_label(ens, i, skip=()):
             continue
         if isinstance(v, str) and not v:
             continue
-        parts.append(f"{name}={v:.3g}" if isinstance(v, (float, np.floating)) else f"{name}={v}")
+        parts.append(_value_label(ens, name, v))
     if not parts and "scene_name" in ens.coords:
         parts.append(str(ens["scene_name"].values[i]))
     return ", ".join(parts)
@@ -366,15 +386,15 @@ def crack_length_plot(ds, *, by=None, style=None, ax=None, path=None, cmap="viri
                 ax.plot(L.t, y, color="0.4", ls=(0, (3, 2)), lw=1.7)
                 handles.append(Line2D([], [], color="0.4", ls=(0, (3, 2)), label=_member_label(ds, i)))
         if table:
-            handles = [Line2D([], [], color=c, lw=2.5, label=f"{by} = {u:g}") for u, c in table.items()] + \
-                [Line2D([], [], color="k", ls=styles[k % len(styles)], label=f"{style} = {u:g}")
+            handles = [Line2D([], [], color=c, lw=2.5, label=_value_label(ds, by, u)) for u, c in table.items()] + \
+                [Line2D([], [], color="k", ls=styles[k % len(styles)], label=_value_label(ds, style, u))
                  for k, u in enumerate(suniq)] + handles
         elif norm is not None:
-            fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cm), ax=ax, label=by)
+            fig.colorbar(plt.cm.ScalarMappable(norm=norm, cmap=cm), ax=ax, label=parameter_label(ds, by))
         if handles:
             ax.legend(handles=handles, fontsize=7.5, loc="lower right", framealpha=0.9)
-    ax.set_xlabel(f"time [{L.t.attrs.get('units', '1')}]" if L.t.attrs.get("units", "1") != "1" else "time")
-    ax.set_ylabel(L.attrs["long_name"])
+    ax.set_xlabel(_da_label(L["t"]))
+    ax.set_ylabel(_da_label(L))
     ax.set_title(title or "mean crack length")
     ax.grid(alpha=0.3)
     return _finish(fig, path)
@@ -400,17 +420,18 @@ def ensemble_summary(ens, *, by=None, x=None, path=None, title=None):
             sel = (bv == b) & np.isfinite(xv)
             order = np.argsort(xv[sel])
             colour = table[b] if table else cm(norm(b))
-            a1.plot(xv[sel][order], final[sel][order], "o-", color=colour, label=f"{by} = {b:g}")
+            a1.plot(xv[sel][order], final[sel][order], "o-", color=colour, label=_value_label(ens, by, b))
         rest = ~(np.isfinite(xv) & np.isfinite(bv))
         for i in np.nonzero(rest)[0]:
             a1.axhline(final[i], color="0.4", ls=(0, (3, 2)), lw=1.2, label=_member_label(ens, i))
-        a1.set_xlabel(x)
+        a1.set_xlabel(parameter_label(ens, x))
         a1.legend(fontsize=8, loc="best")
     else:
         a1.bar(np.arange(len(final)), final, color="C0")
         a1.set_xticks(np.arange(len(final)), [_member_label(ens, i) for i in range(len(final))],
                       rotation=30, ha="right", fontsize=7)
-    a1.set_ylabel(f"mean crack length at t = {float(L.t[-1]):.3g}")
+    units = L.attrs.get("units", "1")
+    a1.set_ylabel(f"mean crack length at t = {float(L.t[-1]):.3g}" + (f" [{units}]" if units != "1" else ""))
     a1.set_title("final mean crack length")
     a1.grid(alpha=0.3)
     if title:
@@ -419,7 +440,10 @@ def ensemble_summary(ens, *, by=None, x=None, path=None, title=None):
 
 
 def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
-    """Rupture-time contours of every member, one panel each, over its tau_c field."""
+    """Rupture-time contours of every member, one panel each, over its tau_c field, with
+    the edge of the ruptured region in black (said in a legend)."""
+    from matplotlib.lines import Line2D
+
     plt = _plt()
     n = ens.sizes["member"]
     if ncols is None:
@@ -431,8 +455,8 @@ def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
     fig, axes = plt.subplots(nrows, ncols, figsize=(w * ncols, w / aspect * nrows + 0.6 * nrows),
                              dpi=100, layout="constrained", squeeze=False)
     if np.isscalar(levels):
-        rt = ens["rupture_time"].values
-        tmax = float(np.nanmax(rt)) if np.isfinite(rt).any() else 0.0
+        rt = np.asarray(ens["rupture_time"].values)
+        tmax = float(np.max(rt[np.isfinite(rt)])) if np.isfinite(rt).any() else 0.0
         levels = np.linspace(0.0, tmax if tmax > 0 else 1.0, int(levels) + 1)[1:]
     for i in range(nrows * ncols):
         ax = axes.flat[i]
@@ -450,6 +474,9 @@ def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
     cmap = ListedColormap(plt.get_cmap("plasma")(np.linspace(0.0, 0.85, 256)))
     sm = plt.cm.ScalarMappable(norm=plt.Normalize(0.0, float(np.max(levels))), cmap=cmap)
     fig.colorbar(sm, ax=axes, label=_label(ens, "rupture_time") + " (contours)", shrink=0.6, aspect=30)
+    if d0.sizes["x3"] > 1:
+        fig.legend(handles=[Line2D([], [], color="k", lw=1.4, label=f"black: {FAILED_EDGE}")],
+                   loc="outside lower center", fontsize=8, frameon=False)
     if title:
         fig.suptitle(title)
     return _finish(fig, path)
@@ -469,32 +496,41 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
         raise ValueError(f"no snapshots of {field!r} to animate")
     da = d[field].transpose("t", "x1", "x3")
     frames = np.asarray(da.values)
-    vmin, vmax = _robust(frames, 1.0, 99.5) if robust else (np.nanmin(frames), np.nanmax(frames))
-    if field.startswith(("tau", "v_")):
-        m = max(abs(vmin), abs(vmax))
-        vmin, vmax = -m, m
+    if robust:
+        vmin, vmax = _limits(frames, field, True, 1.0, 99.5)
+    else:
+        vmin, vmax = _robust(frames, 0.0, 100.0)
+    plane = _is_plane(d)
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=dpi, layout="constrained")
-    mesh = _plane_image(ax, d, frames[0], cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
-    fig.colorbar(mesh, ax=ax, label=_label(d, field), shrink=0.9)
+    if plane:               # the plane problem: the field is a line along x1
+        (artist,) = ax.plot(d["x1"].values, frames[0][:, 0], color="C0", lw=1.5)
+        pad = 0.05 * (vmax - vmin)
+        ax.set_ylim(vmin - pad, vmax + pad)
+        ax.set_xlabel(_label(d, "x1"))
+        ax.set_ylabel(_label(d, field))
+        ax.grid(alpha=0.3)
+    else:
+        artist = _plane_image(ax, d, frames[0], cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
+        fig.colorbar(artist, ax=ax, label=_label(d, field), shrink=0.9)
     t = da["t"].values
     name = da.attrs.get("long_name", field)
     title = ax.set_title(f"{name}, t = {t[-1]:.3g}")
     fig.canvas.draw()                    # final layout, with the widest title
     fig.set_layout_engine("none")
     title.set_text("")                   # hidden titles get moved off the figure: empty it instead
-    mesh.set_visible(False)
+    artist.set_visible(False)
     fig.canvas.draw()
     background = fig.canvas.copy_from_bbox(fig.bbox)
-    mesh.set_visible(True)
+    artist.set_visible(True)
     images = []
     for k in range(len(t)):
-        vals = frames[k]
-        if d.sizes["x3"] == 1:
-            vals = np.repeat(vals, 2, axis=1)
-        mesh.set_array(np.asarray(vals).T.ravel())
+        if plane:
+            artist.set_ydata(frames[k][:, 0])
+        else:
+            artist.set_array(np.asarray(frames[k]).T.ravel())
         title.set_text(f"{name}, t = {t[k]:.3g}")
         fig.canvas.restore_region(background)
-        ax.draw_artist(mesh)
+        ax.draw_artist(artist)
         ax.draw_artist(title)
         rgba = np.asarray(fig.canvas.buffer_rgba())
         images.append(Image.fromarray(rgba[..., :3].copy()).convert("P", palette=Image.Palette.ADAPTIVE))

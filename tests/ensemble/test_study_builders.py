@@ -246,7 +246,7 @@ def test_cli_sweep_import_registers_the_builders_of_a_module(tmp_path, monkeypat
     assert res.exit_code == 1 and res.output.startswith("Error: --import: cannot import 'no_such_module_xyz'")
     res = CliRunner().invoke(main, args + ["--import", "my_builders"])
     assert res.exit_code == 0, res.output
-    assert "1 members: 1 ran" in res.output
+    assert "1 member: 1 ran" in res.output
     sys.modules.pop("my_builders", None)
 
 
