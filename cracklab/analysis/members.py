@@ -28,8 +28,9 @@ def _keep(ok, dims):
 def trim_padding(data):
     """``data`` (one member) without the NaN padding an outer join left on it.
 
-    A Dataset: t, x1, x3 where its first recorded snapshot field is NaN throughout, and
-    input_x1, input_x3 where its first float input field is. A DataArray: the positions
+    A run's Dataset: t, x1, x3 where its first recorded snapshot field is NaN throughout,
+    and input_x1, input_x3 where its first float input field is. Another Dataset: the
+    positions along a dimension where every variable is NaN. A DataArray: the positions
     along any dimension where it is NaN throughout."""
     if isinstance(data, xr.DataArray):
         if data.dtype.kind != "f" or data.ndim == 0:
@@ -42,6 +43,14 @@ def trim_padding(data):
     inputs = [v for v in data.data_vars if set(INPUT_DIMS) <= set(data[v].dims) and data[v].dtype.kind == "f"]
     if inputs:
         keep.update(_keep(data[inputs[0]].notnull(), INPUT_DIMS))
+    if not fields and not inputs:       # not a run (a result of these functions): all its variables NaN
+        floats = [data[v] for v in data.data_vars if data[v].dtype.kind == "f" and data[v].ndim]
+        for dim in data.dims:
+            own = [v for v in floats if dim in v.dims]
+            if own:
+                ok = np.logical_or.reduce([v.notnull().any([d for d in v.dims if d != dim]).values for v in own])
+                if ok.any() and not ok.all():
+                    keep[dim] = np.nonzero(ok)[0]
     return data.isel(keep) if keep else data
 
 

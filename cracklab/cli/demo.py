@@ -100,7 +100,7 @@ def ensemble_demo(out="out", *, study=STUDY, scheduler=None, workers=None, progr
         return False
     paths = [out / "ensemble_crack_length.png", out / "ensemble_rupture.png"]
     P.ensemble_summary(ens, by="contrast", x="diameter", path=paths[0],
-                       title=f"{spec.name}: {ens.sizes['member']} members")
+                       title=f"{spec.name}: {P.plural(ens.sizes['member'], 'member')}")
     P.ensemble_panels(ens, path=paths[1], title="rupture-time contours over tau_c (black: failed region)")
     random = [i for i, name in enumerate(ens.scene_name.values) if name == "random_toughness"]
     if random:

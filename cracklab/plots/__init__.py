@@ -9,11 +9,15 @@ returns the path).
 * ``snapshot``: one field (delta_2, v_2, tau_2, strength, ...) at one time;
 * ``rupture_contours``: contours of ``rupture_time`` over the plane (over the toughness
   field tau_c of the scene, when it is a field);
-* ``crack_length`` / ``crack_length_plot``: mean crack length l(t) = (area with
-  rupture_time <= t) / L3, per member for an ensemble, coloured by a parameter;
+* ``crack_length`` (``cracklab.analysis.crack_length``) / ``crack_length_plot``: mean
+  crack length l(t) = (area with rupture_time <= t) / L3, per member for an ensemble,
+  coloured by a parameter;
 * ``ensemble_summary``: crack length curves coloured by one parameter and the final
   length against another; ``ensemble_panels``: rupture-time contours of every member;
 * ``animate``: an animated GIF of a field over its snapshots (PillowWriter).
+
+Parameters are named in plain words (``parameter_label``), axes carry units, and in the
+plane problem (n3 = 1) fields are drawn as lines along x1.
 """
 from __future__ import annotations
 
@@ -75,21 +79,22 @@ GREEK = {"tau": r"\tau", "delta": r"\delta", "mu": r"\mu", "sigma": r"\sigma", "
 
 
 def parameter_label(ds, name, *, units=True) -> str:
-    """A swept parameter in plain words for legends and axes: its key without the scene
-    section (``law_delta_c`` -> delta_c, written as the symbol), other underscores as
-    spaces, and its units when the coordinate has them."""
+    """A swept parameter in plain words for legends and axes: a symbol for a Greek name
+    (``law_delta_c`` -> delta_c in mathtext), else its key without the section of a law,
+    loading or material path (other sections kept: "record every"), underscores as
+    spaces; and its units when the coordinate has them."""
     import re
 
     var = ds[name] if name in ds.coords else None
-    param = var.attrs.get("parameter", name) if var is not None else name
-    key = str(param).rsplit(".", 1)[-1]
+    param = str(var.attrs.get("parameter", name) if var is not None else name)
+    section, _, key = param.rpartition(".")
     head, _, sub = key.partition("_")
     m = re.fullmatch(r"([a-z]+?)(\d*)", head)
     if m and m.group(1) in GREEK:
         text = "$" + GREEK[m.group(1)] + (f"^{{{m.group(2)}}}" if m.group(2) else "") + \
             (f"_{{{sub.replace('_', ',')}}}" if sub else "") + "$"
-    else:
-        text = key.replace("_", " ")
+    else:           # a law's or a loading's key says what it is; record.every, grid.n1 need their section
+        text = (key if section in ("", "law", "loading", "material") else f"{section} {key}").replace("_", " ")
     u = var.attrs.get("units") if var is not None else None
     return f"{text} [{u}]" if units and u and u != "1" else text
 

@@ -1,4 +1,6 @@
 """Figures of a run and of an ensemble: files are written and not empty; crack length."""
+import warnings
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -101,3 +103,121 @@ def test_ensemble_figures_and_cli(ens_store, run_store, tmp_path):
     _png(tmp_path / "r.png")
     res = runner.invoke(main, ["plot", str(run_store), "--kind", "summary"])
     assert res.exit_code != 0 and "needs an ensemble" in res.output
+
+
+# ---------------------------------------------------------------------------- conventions
+def _assert_nothing_clipped(fig):
+    """Everything drawn (labels, titles, legends, colour bars) lies inside the figure."""
+    fig.canvas.draw()
+    drawn, box = fig.get_tightbbox(fig.canvas.get_renderer()), fig.bbox_inches
+    tol = 0.01      # inches
+    assert drawn.x0 >= box.x0 - tol and drawn.y0 >= box.y0 - tol and drawn.x1 <= box.x1 + tol \
+        and drawn.y1 <= box.y1 + tol, f"clipped: {drawn} outside {box}"
+
+
+def _legend_texts(fig):
+    out = []
+    for a in fig.axes:
+        if a.get_legend() is not None:
+            out += [t.get_text() for t in a.get_legend().get_texts()]
+    out += [t.get_text() for leg in fig.legends for t in leg.get_texts()]
+    return out
+
+
+def _plain(text):
+    """No internal names: underscores only inside mathtext ($...$)."""
+    outside = "".join(part for i, part in enumerate(text.split("$")) if i % 2 == 0)
+    return "_" not in outside
+
+
+def test_ensemble_figures_speak_plain_words_without_warnings(ens_store):
+    import matplotlib.pyplot as plt
+
+    ens = E.open_ensemble(ens_store)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        figs = [P.ensemble_summary(ens), P.ensemble_panels(ens), P.crack_length_plot(ens)]
+    legends = _legend_texts(figs[0])
+    assert "contrast = 1.5" in legends and "diameter = 0.25" in legends, legends
+    assert all(_plain(t) for t in legends) and not any("correlation_length" in t for t in legends), legends
+    assert any(P.FAILED_EDGE in t for t in _legend_texts(figs[1]))
+    assert figs[0].axes[1].get_xlabel() == "diameter"
+    for fig in figs:
+        _assert_nothing_clipped(fig)
+        assert all(_plain(a.get_title()) for a in fig.axes)
+        plt.close(fig)
+
+
+def test_parameter_labels():
+    ds = xr.Dataset(coords={"law_delta_c": ("member", [0.1], {"parameter": "law.delta_c"}),
+                            "record_every": ("member", [2], {"parameter": "record.every"}),
+                            "loading_tau0_2": ("member", [1.0], {"parameter": "loading.tau0_2", "units": "Pa"}),
+                            "correlation_length": ("member", [0.2])})
+    assert P.parameter_label(ds, "law_delta_c") == r"$\delta_{c}$"
+    assert P.parameter_label(ds, "record_every") == "record every"
+    assert P.parameter_label(ds, "loading_tau0_2") == r"$\tau^{0}_{2}$ [Pa]"
+    assert P.parameter_label(ds, "correlation_length") == "correlation length"
+
+
+def _si_run(n3=8, nan=False):
+    """A small run's Dataset in SI units (m, s): a straight front and a tau_c field of 1-2."""
+    x1 = np.arange(16) * 10.0
+    x3 = np.arange(n3) * 10.0
+    rt = np.tile((x1 / 100.0)[:, None], (1, n3))
+    rt[12:] = np.nan
+    tau_c = 1.0 + (np.arange(16)[:, None] % 3 == 0) * np.ones((1, n3))
+    t = np.array([0.0, 0.5, 1.0])
+    d2 = np.where(np.isnan(rt)[None] | nan, np.nan, np.maximum(t[:, None, None] - np.nan_to_num(rt)[None], 0))
+    coords = {"t": ("t", t, {"units": "s", "long_name": "time"}),
+              "x1": ("x1", x1, {"units": "m", "long_name": "distance along x1"}),
+              "x3": ("x3", x3, {"units": "m", "long_name": "distance along x3"})}
+    return xr.Dataset({"rupture_time": (("x1", "x3"), rt, {"units": "s", "long_name": "first time the point failed"}),
+                       "delta_2": (("t", "x1", "x3"), d2, {"units": "m", "long_name": "opening"}),
+                       "input_law_tau_c": (("input_x1", "input_x3"), tau_c,
+                                           {"units": "Pa", "long_name": "scene input law.tau_c"})},
+                      coords=coords, attrs={"scene": '{"grid": {"n1": 16, "n3": %d, "L1": 160.0, "L3": %r}, '
+                                                     '"t_end": 1.0}' % (n3, 10.0 * n3)})
+
+
+def test_axes_carry_units_and_the_background_its_own_range():
+    import matplotlib.pyplot as plt
+
+    ds = _si_run()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = P.rupture_contours(ds)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "distance along x1 [m]" and ax.get_ylabel() == "distance along x3 [m]"
+    labels = [a.get_ylabel() for a in fig.axes[1:]]
+    assert "first time the point failed [s]" in labels and "tau_c [Pa]" in labels, labels
+    mesh = ax.collections[0]
+    assert (mesh.norm.vmin, mesh.norm.vmax) == (1.0, 2.0)       # the field's range, not beyond it
+    _assert_nothing_clipped(fig)
+    plt.close(fig)
+    fig = P.crack_length_plot(ds)
+    assert fig.axes[0].get_xlabel() == "time [s]" and fig.axes[0].get_ylabel().endswith("[m]")
+    plt.close(fig)
+
+
+def test_plane_snapshots_are_lines_and_nan_fields_do_not_warn(tmp_path):
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import QuadMesh
+
+    plane = _si_run(n3=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = P.snapshot(plane)
+        ax = fig.axes[0]
+        assert len(ax.lines) == 1 and len(ax.lines[0].get_xdata()) == 16
+        assert not [c for c in ax.collections if isinstance(c, QuadMesh)]
+        assert ax.get_xlabel() == "distance along x1 [m]" and ax.get_ylabel() == "opening [m]"
+        plt.close(fig)
+        gif = P.animate(plane, tmp_path / "plane.gif")
+        with Image.open(gif) as im:
+            assert im.n_frames == 3
+        fig = P.rupture_contours(plane)
+        assert len(fig.axes[0].lines) == 1 and fig.axes[0].get_ylabel() == "first time the point failed [s]"
+        plt.close(fig)
+        unfinished = _si_run(nan=True)           # snapshots not written yet: all NaN
+        plt.close(P.snapshot(unfinished))
+        P.animate(unfinished, tmp_path / "nan.gif")
