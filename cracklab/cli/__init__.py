@@ -316,8 +316,13 @@ def verify(store, quick) -> None:
               help="The half plane of n1 x (n3 + 1) nodes below a free surface on x3 = 0 (mirror symmetry, "
                    "Grid(free_surface=True)); to set against the periodic n1 x n3 grid and the doubled "
                    "n1 x 2 n3 one (docs/performance.md, 'Free surface by mirror symmetry').")
+@click.option("--bimaterial", is_flag=True,
+              help="A bottom half space of another material (mu 0.6, c_s 0.8 times the top's, nu 0.3; the "
+                   "product scheme): to set against the same bench of one material "
+                   "(docs/performance.md, 'Bimaterial interface').")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, as_json) -> None:
+def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, bimaterial,
+          as_json) -> None:
     """Median cost per step (second half of the run) and a same-process FFT pair."""
     from .bench import run as run_bench
     from ..errors import InputError
@@ -327,7 +332,7 @@ def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law,
     try:
         result = run_bench(n1, n3, mode, nsteps, engine, progress=not as_json and sys.stderr.isatty(),
                            threads=threads, engine_threads=engine_threads, fit_steps=fit_steps, law=law,
-                           free_surface=free_surface)
+                           free_surface=free_surface, bimaterial=bimaterial)
     except InputError as exc:
         raise click.ClickException(str(exc)) from None
     if as_json:

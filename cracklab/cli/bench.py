@@ -7,6 +7,8 @@ forced nucleation) on a plane of 100 m cells, both along x1 (x3 for mode III), w
 same time-step rule; the rate-and-state bench reports its Newton evaluations."""
 from __future__ import annotations
 
+import dataclasses
+
 import resource
 import time
 
@@ -28,13 +30,28 @@ MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
 LAWS = ("traction_free", "slip_weakening", "rate_state")
 
 
+#: the bottom of the bimaterial bench, per unit top (mu = cs = 1, nu = 1/4): a compliant side
+BIMATERIAL_BOTTOM = dict(mu=0.6, cs=0.8, nu=0.3)
+
+
 def bench_scene(n1, n3, mode, nsteps, engine="direct", threads=1, engine_threads=None, law="traction_free",
-                free_surface=False):
+                free_surface=False, bimaterial=False):
     """A traction-free plane under a random load on the components of ``mode`` (with
     ``free_surface``: the half plane of n1 x (n3 + 1) nodes below a free surface, the odd
     component's load zero on its two lines); or, with ``law`` "slip_weakening" or
     "rate_state", a rupture on a plane of 100 m cells (module docstring), loaded along x1
-    (x3 for mode III)."""
+    (x3 for mode III). ``bimaterial``: the bottom half space of another material
+    (BIMATERIAL_BOTTOM, scaled with the top's), product scheme."""
+    scene = _bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface)
+    if not bimaterial:
+        return scene
+    top = scene.material
+    bottom = Material(mu=top.mu * BIMATERIAL_BOTTOM["mu"], cs=top.cs * BIMATERIAL_BOTTOM["cs"],
+                      nu=BIMATERIAL_BOTTOM["nu"])
+    return scene.replace(materials=(top, bottom), numerics=dataclasses.replace(scene.numerics, formulation="product"))
+
+
+def _bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface):
     if law not in LAWS:
         raise InputError("law", f"must be one of {', '.join(LAWS)}, got {law!r}")
     if law != "traction_free" and mode == "I":
@@ -128,7 +145,7 @@ PAIR_EVERY = 10
 
 
 def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None,
-        law="traction_free", free_surface=False):
+        law="traction_free", free_surface=False, bimaterial=False):
     """Time every step of a bench scene; the median over the second half is the figure.
 
     The FFT baseline is timed in the same stretch (a pair after every PAIR_EVERY-th timed
@@ -142,7 +159,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     below a free surface (``Grid(free_surface=True)``: cosine and sine transforms along x3;
     the FFT baseline is then the pair of an even component, cosine transform and real FFT).
     """
-    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface)
+    scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface, bimaterial)
     stepper = Stepper(scene, interface_for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
     response = stepper.response
     overlap = any(ch.engine.overlap for ch in response.channels.values())
@@ -181,7 +198,8 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads,
                                                                       components=scene.components)
     return {
-        "n1": n1, "n3": n3, "free_surface": bool(free_surface), "mode": mode, "law": law,
+        "n1": n1, "n3": n3, "free_surface": bool(free_surface), "bimaterial": bool(bimaterial), "mode": mode,
+        "law": law, "formulation": scene.formulation,
         "steps": scene.nsteps + 1, "engine": engine,
         "timed_steps": int(timed.size), "ms_per_step": ms,
         "us_per_point_per_step": 1e3 * ms / (scene.grid.shape[0] * scene.grid.shape[1]),

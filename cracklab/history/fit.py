@@ -75,6 +75,7 @@ from pathlib import Path
 import numpy as np
 from scipy import special as sp
 
+from ..solver import cuts as _cuts
 from ..solver import kernels as _k
 
 __all__ = [
@@ -103,7 +104,7 @@ FIT_VERSION = 2
 DEFAULT_T0 = 1.0
 #: target absolute error of the representation, relative to the kernel's scale, per kernel
 #: (module docstring, item 5)
-DEFAULT_TOL = {"I": 1e-5, "II": 5e-6, "III": 1e-5}
+DEFAULT_TOL = {"I": 1e-5, "II": 5e-6, "III": 1e-5, "H11": 5e-6, "H22": 5e-6, "H12": 5e-6}
 #: upper end of the least-squares samples (the check grid ends there too, item 4)
 T_FIT = 1e14
 #: each cut starts at the order where its own error is within 2 * _CUT_SHARE * tol * scale
@@ -155,8 +156,8 @@ class ExpFit:
 
 # ----------------------------------------------------------------------------- cuts
 def _check(kernel, formulation):
-    if kernel not in _k.KERNELS:
-        raise ValueError(f"kernel must be one of {_k.KERNELS}, got {kernel!r}")
+    if kernel not in _k.ALL_KERNELS:
+        raise ValueError(f"kernel must be one of {_k.ALL_KERNELS}, got {kernel!r}")
     if formulation not in ("displacement", "velocity"):
         raise ValueError(f"formulation must be 'displacement' or 'velocity', got {formulation!r}")
 
@@ -168,13 +169,7 @@ def _branch_points(kernel, nu):
 
 def _transform(kernel, s, A, B, a, z0, formulation):
     """L[K](s) in terms of explicit branch values A = sqrt(1+s^2), B = sqrt(1+s^2/a^2)."""
-    if kernel == "III":
-        f = A - s
-    else:
-        R = 4.0 * A * B - (2.0 + s * s) ** 2
-        alpha = B if kernel == "I" else A
-        eta = a if kernel == "I" else 1.0
-        f = -R / (s * s * alpha) - eta * s
+    f = _k.branch_transform(kernel, s, A, B, a)
     if formulation == "velocity":
         f = (z0 - f) / s
     return f
@@ -183,27 +178,14 @@ def _transform(kernel, s, A, B, a, z0, formulation):
 def cut_density(kernel, b, x, *, nu=0.25, formulation="displacement"):
     """rho_b(x) = [F(ib - x - i0) - F(ib - x + i0)] / (2 pi i), x > 0 (complex array).
 
-    ``b`` is 1 or a = c_d/c_s; g_b(T) = int_0^inf rho_b(x) exp(-x T) dx.
+    ``b`` is 1 or a = c_d/c_s; g_b(T) = int_0^inf rho_b(x) exp(-x T) dx (solver/cuts.py).
     """
     _check(kernel, formulation)
     a = _k.wave_speed_ratio(nu)
     z0 = _k.static_integral(kernel, nu)
-    x = np.asarray(x, dtype=float)
-    s = 1j * b - x
-    A = np.sqrt(s + 1j) * np.sqrt(s - 1j)
-    B = np.sqrt(s + 1j * a) * np.sqrt(s - 1j * a) / a
-    root = 1j * np.sqrt(x)  # sqrt(s - i b) on the upper side of the cut
-    if b == 1.0:
-        up = np.sqrt(s + 1j) * root
-        fa = _transform(kernel, s, up, B, a, z0, formulation)
-        fb = _transform(kernel, s, -up, B, a, z0, formulation)
-    elif b == a:
-        up = np.sqrt(s + 1j * a) * root / a
-        fa = _transform(kernel, s, A, up, a, z0, formulation)
-        fb = _transform(kernel, s, A, -up, a, z0, formulation)
-    else:
+    if b not in (1.0, a):
         raise ValueError(f"b must be 1 or a = {a}, got {b!r}")
-    return (fb - fa) / (2j * np.pi)
+    return _cuts.density(lambda s, A, B, aa: _transform(kernel, s, A, B, aa, z0, formulation), b, x, a)
 
 
 def cut_quadrature(kernel, *, nu=0.25, formulation="displacement", h=_H, umin=_UMIN, umax=_UMAX):

@@ -136,6 +136,9 @@ class Scene:
         if self.beta is not None:
             object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
+        if self.materials[0] != self.materials[1] and self.formulation != "product":
+            raise InputError("numerics.formulation", f"a pair of different materials runs the product scheme; "
+                                                     f"got {self.formulation!r}")
         active = self.components
         if not active:
             raise InputError("loading", f"no load on a component the law {self.law.kind!r} acts on "
@@ -193,7 +196,8 @@ class Scene:
 
     def _check_materials(self):
         """One material for both sides, or (top, bottom): stored as ``materials`` = (top,
-        bottom) always, and ``material`` = the one material when the two are the same."""
+        bottom) always, and ``material`` = the one material, or of two the one with the faster
+        shear waves (it sets the time step)."""
         material, materials = self.material, self.materials
         if material is not None and not isinstance(material, Material):
             raise InputError("material", f"must be a cracklab.Material, got {type(material).__name__}")
@@ -208,16 +212,15 @@ class Scene:
                 if not isinstance(m, Material):
                     raise InputError(f"materials.{side}", f"must be a cracklab.Material, got {type(m).__name__}")
             materials = tuple(materials)
-            if material is not None and materials != (material, material):
+            top, bottom = materials
+            if material is not None and materials != (material, material) \
+                    and material != (bottom if bottom.cs > top.cs else top):  # a scene's own (replace)
                 raise InputError("material", "give material (both sides) or materials (top, bottom), not both "
                                              "with different values")
         top, bottom = materials
-        if top != bottom:
-            raise InputError("materials", f"different materials on the two sides (top {top}, bottom {bottom}) "
-                                          f"need the bimaterial interface response, which is not implemented; "
-                                          f"give one material for both sides")
         object.__setattr__(self, "materials", materials)
-        object.__setattr__(self, "material", top)
+        # the time step and the velocity scales follow the side with the faster shear waves
+        object.__setattr__(self, "material", bottom if bottom.cs > top.cs else top)
 
     def _check_shapes(self):
         shape = self.grid.shape
@@ -264,7 +267,7 @@ class Scene:
     def beta_max(self) -> float:
         """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability)."""
         comps = self.components
-        return beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=self.material.nu)
+        return min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
 
     @property
     def dt(self) -> float:

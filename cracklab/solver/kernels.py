@@ -44,9 +44,18 @@ __all__ = [
     "Z_integral",
     "laplace",
     "impedance",
+    "branch_transform",
+    "FACE_KERNELS",
+    "ALL_KERNELS",
 ]
 
+from . import face_kernels as _face  # noqa: E402
+
+#: the kernels of the pair of one material (Eq. 26)
 KERNELS = ("I", "II", "III")
+#: the kernels of one half space's face (solver/face_kernels.py)
+FACE_KERNELS = _face.FACE_KERNELS
+ALL_KERNELS = KERNELS + FACE_KERNELS
 
 # --------------------------------------------------------------------------
 # Bessel building blocks
@@ -163,8 +172,8 @@ def _j1x(x):
 
 
 def _check_kernel(kernel):
-    if kernel not in KERNELS:
-        raise ValueError(f"kernel must be one of {KERNELS}, got {kernel!r}")
+    if kernel not in ALL_KERNELS:
+        raise ValueError(f"kernel must be one of {ALL_KERNELS}, got {kernel!r}")
     return kernel
 
 
@@ -189,9 +198,12 @@ def wave_speed_ratio(nu):
 
 
 def eta_hat(kernel, nu=0.25):
-    """Dimensionless radiation-damping factor of eq. (4)/(24): a for mode I, 1 for II, III."""
+    """Dimensionless radiation-damping factor of eq. (4)/(24): a for mode I (and a face's
+    normal kernel H22), 1 for II, III (and H11), 0 for the coupling H12."""
     _check_kernel(kernel)
-    return wave_speed_ratio(nu) if kernel == "I" else 1.0
+    if kernel == "H12":
+        return 0.0
+    return wave_speed_ratio(nu) if kernel in ("I", "H22") else 1.0
 
 
 # --------------------------------------------------------------------------
@@ -241,6 +253,8 @@ def C_III(T):
 
 def C(kernel, T, nu=0.25):
     """Kernel C_kernel(T) of eq. (26) for kernel in {"I", "II", "III"}."""
+    if kernel in FACE_KERNELS:
+        return _face.C(kernel, T, nu)
     _check_kernel(kernel)
     if kernel == "I":
         return C_I(T, nu)
@@ -251,6 +265,8 @@ def C(kernel, T, nu=0.25):
 
 def C0(kernel, nu=0.25):
     """Exact C(0) from eq. (26): 4a - 4 - a^3/2 (I), 7/2 - 4/a (II), 1/2 (III)."""
+    if kernel in FACE_KERNELS:
+        return _face.C0(kernel, nu)
     _check_kernel(kernel)
     if kernel == "III":
         return 0.5
@@ -262,6 +278,8 @@ def C0(kernel, nu=0.25):
 
 def static_integral(kernel, nu=0.25):
     """int_0^inf C dT: 2(1 - 1/a^2) = 1/(1-nu) for I and II (text after eq. 33), 1 for III."""
+    if kernel in FACE_KERNELS:
+        return _face.static_integral(kernel, nu)
     _check_kernel(kernel)
     if kernel == "III":
         return 1.0
@@ -282,6 +300,8 @@ def Z(kernel, T, nu=0.25):
     Z_II  = W(T) + Q(T) - (2/a^2) Q(aT) - 2T g(T) + (2/a) T g(aT),
     Z_III = W(T).
     """
+    if kernel in FACE_KERNELS:
+        return _face.Z(kernel, T, nu)
     _check_kernel(kernel)
     T = _time(T)
     _, j11, w1, g1, _ = _blocks(T)
@@ -306,6 +326,8 @@ def Z(kernel, T, nu=0.25):
 
 def integral(kernel, T, nu=0.25):
     """int_0^T C(T') dT' = static_integral - Z(T) (eqs. 26, 33)."""
+    if kernel in FACE_KERNELS:
+        return _face.integral(kernel, T, nu)
     return _out(static_integral(kernel, nu) - np.asarray(Z(kernel, T, nu)))
 
 
@@ -316,6 +338,8 @@ def Z_integral(kernel, T, nu=0.25):
     int_0^T Q(bt) dt = (J0(bT) - g(bT))/b, int_0^T t g(bt) dt = T k(bT)/(3b).
     Tends to int_0^inf T C(T) dT = a (I), 1 (II, III).
     """
+    if kernel in FACE_KERNELS:
+        return _face.Z_integral(kernel, T, nu)
     _check_kernel(kernel)
     T = _time(T)
     j01, _, _, g1, k1 = _blocks(T)
@@ -356,6 +380,8 @@ def laplace(kernel, s, nu=0.25):
     L[C_III] = sqrt(1+s^2) - s.  Evaluated without cancellation for small and
     large |s| (meant for Re s >= 0).
     """
+    if kernel in FACE_KERNELS:
+        return _face.laplace(kernel, s, nu)
     _check_kernel(kernel)
     s = np.asarray(s)
     cplx = np.iscomplexobj(s)
@@ -399,3 +425,17 @@ def impedance(kernel, s, nu=0.25):
     _check_kernel(kernel)
     s_arr = np.asarray(s)
     return _out(eta_hat(kernel, nu) * s_arr + np.asarray(laplace(kernel, s_arr, nu)))
+
+
+def branch_transform(kernel, s, A, B, a):
+    """L[C_kernel](s) with explicit branch values A = sqrt(1+s^2), B = sqrt(1+s^2/a^2)
+    (the form the branch cuts of history/fit.py and solver/cuts.py evaluate)."""
+    if kernel in FACE_KERNELS:
+        return _face.branch_transform(kernel, s, A, B, a)
+    _check_kernel(kernel)
+    if kernel == "III":
+        return A - s
+    R = 4.0 * A * B - (2.0 + s * s) ** 2
+    alpha = B if kernel == "I" else A
+    eta = a if kernel == "I" else 1.0
+    return -R / (s * s * alpha) - eta * s

@@ -130,6 +130,7 @@ class Stepper:
             # tau* = tau0 + f (f: the response's work arrays)
             v_new, tau = law.solve(self.lstate, f, trial, self.eta, dt, strength, terms)
             scheme.finish(self, n, v_new)
+            self.response.settle(v_new)
             self.v, self.tau, self.n = v_new, tau, n + 1
             self._check(n, t, v_new, self.load.factor(t, length))
             yield State(n, t, self.delta, v_new, tau, np.broadcast_to(law.applied_strength(strength, tau), grid.shape),

@@ -56,7 +56,7 @@ def convolution_weights(kernel, gamma, j, *, nu=0.25, rule="trapezoid",
     K = C for formulation "displacement" (44), K = Z for "velocity" (48).
     At gamma = 0 every rule gives K(0) (K(0)/2 for j = 0 in "discretized").
     """
-    _choice("kernel", kernel, _k.KERNELS)
+    _choice("kernel", kernel, _k.ALL_KERNELS)
     _choice("rule", rule, RULES)
     _choice("formulation", formulation, FORMULATIONS)
     if rule == "simpson":
@@ -154,10 +154,10 @@ def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
     part "lag": ``W_j``; part "start0", "start1", "start2": ``E_i(n)`` at ``n = j``.
     Broadcast over ``gamma >= 0`` and integer ``j >= 0``.
     """
-    from .kernels import KERNELS
+    from .kernels import ALL_KERNELS
 
-    if kernel not in KERNELS:
-        raise InputError("kernel", f"must be one of {', '.join(map(repr, KERNELS))}; got {kernel!r}")
+    if kernel not in ALL_KERNELS:
+        raise InputError("kernel", f"must be one of {', '.join(map(repr, ALL_KERNELS))}; got {kernel!r}")
     nu = _poisson(nu)
     if order not in (1, 3) or isinstance(order, bool):
         raise InputError("order", f"must be 1 or 3, got {order!r}")

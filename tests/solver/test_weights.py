@@ -150,7 +150,7 @@ def test_nu_is_used():
 
 
 def test_validation():
-    with pytest.raises(ValueError, match=r"kernel.*\('I', 'II', 'III'\)"):
+    with pytest.raises(ValueError, match=r"kernel.*\('I', 'II', 'III', 'H11', 'H22', 'H12'\)"):
         convolution_weights("IV", 0.1, 1)
     with pytest.raises(ValueError, match=r"rule.*discretized.*trapezoid.*simpson.*exact"):
         convolution_weights("I", 0.1, 1, rule="midpoint")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from .base import Interface
+from .bimaterial import Bimaterial
 from .identical import Identical
 
 
@@ -11,8 +12,7 @@ def interface(materials, grid, dt, components, **options) -> Interface:
     (options: cracklab.solver.halfspace.HalfSpace's)."""
     top, bottom = materials if isinstance(materials, (tuple, list)) else (materials, materials)
     if top != bottom:
-        raise NotImplementedError("an interface between different materials (the bimaterial response) "
-                                  "is not implemented")
+        return Bimaterial(top, bottom, grid, dt, components, **options)
     return Identical(top, grid, dt, components, **options)
 
 
@@ -24,4 +24,4 @@ def for_scene(scene, transforms=None, nsteps=None) -> Interface:
                      nsteps=max(scene.nsteps, nsteps or 0), threads=scene.numerics.history_threads)
 
 
-__all__ = ["Identical", "Interface", "for_scene", "interface"]
+__all__ = ["Bimaterial", "Identical", "Interface", "for_scene", "interface"]

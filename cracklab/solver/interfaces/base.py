@@ -8,6 +8,7 @@ gives the interface law what the law's step needs, whatever the half spaces are:
 * ``functional(delta, v_prev=None)`` (displacement and velocity schemes) or
   ``predict(v_prev)`` and ``correct(v_pred)`` (product scheme): f_j at the current
   step from the history of the displacement discontinuity delta and its rate V;
+* ``settle(v_new)`` after step (v) (default: nothing);
 * ``channels`` (its kernels and engines, by name), ``fft`` (the transforms it uses),
   ``wait()``, ``get_state()`` and ``set_state(state)`` (checkpoints).
 """
@@ -19,6 +20,10 @@ class Interface:
 
     eta: dict
     channels: dict
+
+    def settle(self, v_new) -> None:
+        """After step (v), with the jump rate of the step: nothing by default (the
+        bimaterial interface splits it between its faces)."""
 
     def wait(self) -> None:
         """Let the history engines finish the work their last push started."""

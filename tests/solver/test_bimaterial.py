@@ -1,0 +1,154 @@
+"""The interface between two different materials (solver/interfaces/bimaterial.py): the
+identical pair through it, the generalized Rayleigh wave of a frictionless bimaterial
+interface, checkpoints and the scene's checks."""
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+import cracklab
+from cracklab import Grid, Loading, Material, Numerics, Record, Scene
+from cracklab.errors import InputError
+from cracklab.laws import TractionFree
+from cracklab.solver.interfaces import Bimaterial, Identical, for_scene
+from cracklab.solver.stepper import Stepper
+
+PRODUCT = Numerics(formulation="product")
+M = Material(mu=1.0, cs=1.0, nu=0.25)
+
+
+def final_slip(scene, response=None):
+    st = None
+    for st in Stepper(scene, response=response):
+        pass
+    return {c: st.delta[c].copy() for c in st.delta}
+
+
+def through_bimaterial(scene):
+    m = scene.material
+    return Bimaterial(m, m, scene.grid, scene.dt, scene.components, nsteps=scene.nsteps, engine=scene.numerics.engine,
+                      window=scene.numerics.window)
+
+
+def test_identical_pair_through_the_faces_antiplane_is_the_combined_path():
+    """Mode III has no coupling: two identical faces move as -+ delta/2 exactly."""
+    sc = cracklab.scenes.periodic_cracks(n=64, c=0.15, mode="III", beta=0.3, t_end=0.3, numerics=PRODUCT)
+    a, b = final_slip(sc), final_slip(sc, through_bimaterial(sc))
+    assert np.max(np.abs(a[3] - b[3])) <= 1e-12 * np.max(np.abs(a[3]))
+
+
+@pytest.mark.parametrize("mode,c", [("II", 1), ("I", 2)])
+def test_identical_pair_through_the_faces_converges_to_the_combined_path(mode, c):
+    """In plane the faces' continuous motion is stepped too: the paths differ by the
+    scheme's error, which shrinks with the time step at second order."""
+    diffs = []
+    for beta in (0.4, 0.2):
+        sc = cracklab.scenes.periodic_cracks(n=64, c=0.15, mode=mode, beta=beta, t_end=0.3, numerics=PRODUCT)
+        a, b = final_slip(sc), final_slip(sc, through_bimaterial(sc))
+        diffs.append(np.max(np.abs(a[c] - b[c])) / np.max(np.abs(a[c])))
+    assert diffs[0] < 1.5e-3       # measured 8e-4 (II), 2e-4 (I)
+    assert diffs[1] < 0.4 * diffs[0]  # measured 0.30
+
+
+def rayleigh(c, cs, cd):
+    x = (c / cs) ** 2
+    return (2 - x) ** 2 - 4 * np.sqrt(1 - x) * np.sqrt(1 - (c / cd) ** 2)
+
+
+def generalized_rayleigh_speed(m1, m2):
+    """Root of rho1 cs1^4 R1(c)/sqrt(1 - c^2/cd1^2) + (same for 2) = 0 below both shear
+    speeds: the slip wave of a frictionless contact (Weertman 1963; Achenbach & Epstein 1967)."""
+    def f(c):
+        return sum(m.rho * m.cs**4 * rayleigh(c, m.cs, m.cs * m.a) / np.sqrt(1 - (c / (m.cs * m.a)) ** 2)
+                   for m in (m1, m2))
+
+    return brentq(f, 0.5 * min(m1.cs, m2.cs), min(m1.cs, m2.cs) * (1 - 1e-12), xtol=1e-15)
+
+
+def single_mode_frequency(top, bottom, beta, t_end=24.0):
+    """Free oscillation of the mode cos(2 pi x1) of a frictionless interface (shear traction
+    free, no opening), after a step load; the frequency times the wavelength 1 is the speed."""
+    g = Grid(n1=8, n3=1, L1=1.0, L3=1.0)
+    sc = Scene(materials=(top, bottom), grid=g, law=TractionFree(contact=False),
+               loading=Loading(tau0_1=np.cos(2 * np.pi * g.x1)[:, None] * np.ones((8, 1))), t_end=t_end, beta=beta,
+               record=Record(fields=("delta_1",)), numerics=PRODUCT)
+    t, v = [], []
+    for st in Stepper(sc):
+        t.append(st.t)
+        v.append(st.v[1][0, 0])
+    t, v = np.array(t), np.array(v)
+    keep = t > 0.4 * t_end
+    t, v = t[keep], v[keep]
+
+    def misfit(w):  # the wave, plus the decaying transients of the step
+        A = np.stack([np.cos(2 * np.pi * w * t), np.sin(2 * np.pi * w * t), np.ones_like(t), t**-1.5,
+                      t**-0.5 * np.cos(2 * np.pi * t), t**-0.5 * np.sin(2 * np.pi * t)], 1)
+        coef = np.linalg.lstsq(A, v, rcond=None)[0]
+        return float(np.sum((A @ coef - v) ** 2))
+
+    ws = np.linspace(0.8, 1.0, 201)
+    w0 = ws[int(np.argmin([misfit(w) for w in ws]))]
+    return minimize_scalar(misfit, bracket=(w0 - 1e-3, w0, w0 + 1e-3), tol=1e-12).x
+
+
+@pytest.mark.parametrize("bottom", [Material(mu=0.5, cs=1.0, nu=0.25),
+                                    Material(mu=0.5 * 0.95**2, cs=0.95, nu=0.3)])
+def test_frictionless_bimaterial_interface_carries_the_generalized_rayleigh_wave(bottom):
+    want = generalized_rayleigh_speed(M, bottom)
+    got = single_mode_frequency(M, bottom, beta=0.1)
+    assert abs(got / want - 1) < 5e-4   # the issue asks 0.5 %; measured ~1e-4
+
+
+def test_resume_gives_the_same_run():
+    bottom = Material(mu=0.6, cs=0.9, nu=0.3)
+    g = Grid(n1=16, n3=1, L1=1.0, L3=1.0)
+    sc = Scene(materials=(M, bottom), grid=g, law=TractionFree(contact=False),
+               loading=Loading(tau0_1=np.cos(2 * np.pi * g.x1)[:, None] * np.ones((16, 1))), t_end=0.6, beta=0.3,
+               record=Record(fields=("delta_1",)), numerics=PRODUCT)
+    whole = final_slip(sc)
+    stepper = Stepper(sc)
+    for st in stepper:
+        if st.n == 10:
+            break
+    rest = Stepper(sc, start=stepper.get_state())
+    for st in rest:
+        pass
+    np.testing.assert_array_equal(st.delta[1], whole[1])
+
+
+def test_3d_identical_pair_through_the_faces():
+    diffs = []
+    for beta in (0.5, 0.25):
+        sc = cracklab.scenes.elliptical_crack(n=16, a=0.25, b=0.2, beta=beta, t_end=0.15, numerics=PRODUCT)
+        a, b = final_slip(sc), final_slip(sc, through_bimaterial(sc))
+        diffs.append(np.max(np.abs(a[2] - b[2])) / np.max(np.abs(a[2])))
+    assert diffs[0] < 5e-3             # measured 2.7e-3
+    assert diffs[1] < 0.35 * diffs[0]  # measured 0.22
+
+
+def test_scene_takes_two_materials():
+    bottom = Material(mu=0.5, cs=0.8, nu=0.3)
+    sc = cracklab.scenes.lamb(n=8, t_end=0.05, numerics=PRODUCT).replace(materials=(M, bottom))
+    assert isinstance(for_scene(sc), Bimaterial)
+    assert sc.material == M   # the faster side sets the time step
+    assert sc.dt == pytest.approx(sc.beta * sc.grid.dx_min / 1.0)
+    assert isinstance(for_scene(sc.replace(material=M)), Identical)
+    with pytest.raises(InputError, match="numerics.formulation"):
+        sc.replace(numerics=Numerics(formulation="velocity"))
+
+
+def test_free_surface_bimaterial_run_equals_the_doubled_whole_space_run():
+    """The mirror on a bimaterial interface: the half plane against the doubled cell, to
+    round-off, 3D shear under slip weakening at a constant sigma_n (the faces' normal motion
+    is stepped all the same: slip moves it on a bimaterial interface). With friction that
+    follows the normal traction the bimaterial problem is ill-posed (the Adams instability):
+    there round-off grows, to 1e-3 in this run."""
+    import test_mirror as tm
+
+    soft = Material(mu=0.6, cs=0.8, nu=0.3)
+
+    def scene(grid, x1, x3, mk, **options):
+        return tm.shear_scene(grid, x1, x3, mk, **options).replace(materials=(tm.MAT, soft))
+
+    worst, half = tm._pair(scene, ("delta_1", "delta_3", "tau_1", "tau_3"))
+    assert worst < tm.TOL, worst
+    assert float(np.max(np.abs(half["delta_1"].values))) > 0.02          # it ruptured
