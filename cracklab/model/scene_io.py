@@ -122,6 +122,17 @@ def _items(scene):
             yield section, key, value
 
 
+def _two_materials(scene, plain):
+    """{"top": {...}, "bottom": {...}} of a scene with two different materials (None with
+    one): they are written as the tables materials.top and materials.bottom instead of
+    ``material``."""
+    top, bottom = scene.materials
+    if top == bottom:
+        return None
+    return {side: {f.name: plain(getattr(m, f.name)) for f in dataclasses.fields(m)}
+            for side, m in (("top", top), ("bottom", bottom))}
+
+
 def _is_array(value) -> bool:
     return isinstance(value, np.ndarray) and value.ndim > 0
 
@@ -148,6 +159,10 @@ def scene_to_data(scene) -> tuple[dict, dict]:
         data[section][key] = value
     data.update(t_end=_plain(scene.t_end), beta=_plain(scene.beta), units=dict(scene.units),
                 name=scene.name)
+    two = _two_materials(scene, _plain)
+    if two is not None:
+        del data["material"]
+        data["materials"] = two
     return data, arrays
 
 
@@ -169,6 +184,10 @@ def scene_to_toml(scene) -> str:
         if value is None:
             continue
         data[section][key] = np.asarray(value).tolist() if _is_array(value) else _plain(value)
+    two = _two_materials(scene, _plain)
+    if two is not None:
+        del data["material"]
+        data["materials"] = two
     return tomli_w.dumps(data)
 
 

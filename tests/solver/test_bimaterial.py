@@ -152,3 +152,16 @@ def test_free_surface_bimaterial_run_equals_the_doubled_whole_space_run():
     worst, half = tm._pair(scene, ("delta_1", "delta_3", "tau_1", "tau_3"))
     assert worst < tm.TOL, worst
     assert float(np.max(np.abs(half["delta_1"].values))) > 0.02          # it ruptured
+
+
+def test_two_materials_round_trip_through_toml_and_the_output():
+    from cracklab.model.scene_io import scene_from_dataset, scene_from_toml, scene_to_toml, scenes_equal
+
+    bottom = Material(mu=0.45, cs=0.95, nu=0.3)
+    g = Grid(n1=8, n3=1, L1=1.0, L3=1.0)
+    sc = Scene(materials=(M, bottom), grid=g, law=TractionFree(contact=False), loading=Loading(tau0_1=1.0),
+               t_end=0.1, beta=0.2, record=Record(fields=("delta_1",)), numerics=PRODUCT)
+    text = scene_to_toml(sc)
+    assert "[materials.bottom]" in text and "[material]" not in text
+    assert scenes_equal(scene_from_toml(text), sc)
+    assert scene_from_dataset(cracklab.simulate(sc)).materials == (M, bottom)
