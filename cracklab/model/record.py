@@ -8,6 +8,18 @@ import numpy as np
 from ..errors import InputError, check_fields_nesting
 
 FIELDS = ("delta_1", "delta_2", "delta_3", "v_1", "v_2", "v_3", "tau_1", "tau_2", "tau_3", "strength")
+#: each face's own displacement u and velocity v on a bimaterial interface, ``<u|v>_<j>_<side>``
+#: (side "top": x2 = 0+, "bottom": x2 = 0-; u_j_top - u_j_bottom = delta_j); computed only when
+#: recorded, and then also recorded at the stations
+FACE_FIELDS = tuple(f"{k}_{c}_{side}" for k in ("u", "v") for side in ("top", "bottom") for c in (1, 2, 3))
+
+
+def face_field(name: str):
+    """(kind "u" or "v", side, component) of a face field's name, None for another name."""
+    if name not in FACE_FIELDS:
+        return None
+    kind, c, side = name.split("_")
+    return kind, side, int(c)
 
 
 def state_fields() -> tuple:
@@ -22,7 +34,9 @@ def state_fields() -> tuple:
 class Record:
     """Grid ``fields`` every ``every`` steps or at ``times`` (optionally on ``region``,
     {"x1": (lo, hi), "x3": (lo, hi)} in coordinates), and every step at ``stations``
-    {name: (x1, x3)}. With neither ``every`` nor ``times``, about 20 snapshots are kept."""
+    {name: (x1, x3)} (the slip, slip rate and traction components and the strength, and the
+    faces' fields among ``fields``: ``FACE_FIELDS``). With neither ``every`` nor ``times``,
+    about 20 snapshots are kept."""
 
     fields: tuple = ("delta_2",)
     every: int | None = None
@@ -40,9 +54,11 @@ class Record:
         object.__setattr__(self, "fields", tuple(self.fields))
         state = state_fields()
         for f in self.fields:
-            if not isinstance(f, str) or (f not in FIELDS and f not in state):
+            if not isinstance(f, str) or (f not in FIELDS and f not in FACE_FIELDS and f not in state):
                 raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}, "
-                                                  f"or a state variable of the law ({', '.join(state)})")
+                                                  f"a face's motion on a bimaterial interface (u_1_top, v_1_top, "
+                                                  f"... u_3_bottom, v_3_bottom) or a state variable of the law "
+                                                  f"({', '.join(state)})")
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")

@@ -11,7 +11,7 @@ from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
-from .record import FIELDS, Record
+from .record import FIELDS, Record, face_field
 from ..solver.schemes import SCHEMES
 from ..solver.stability import beta_max, gamma_limit
 
@@ -188,11 +188,25 @@ class Scene:
         for f in self.record.fields:
             if f in state or f == "strength":
                 continue
+            if face_field(f):
+                self._check_face_field(f, face_field(f)[2], active)
+                continue
             if f not in FIELDS:
                 raise InputError("record.fields", f"{f!r} is not a state variable of the law {self.law.kind!r} "
                                                   f"(its state variables: {', '.join(state) or 'none'})")
             if int(f[-1]) not in active:
                 raise InputError("record.fields", f"{f!r} is not computed: active components are {active}")
+
+    def _check_face_field(self, name, c, active):
+        """A face's own motion is held on a bimaterial interface, for the components its faces carry."""
+        if self.materials[0] == self.materials[1]:
+            raise InputError("record.fields", f"{name!r}: each face's own motion is computed on a bimaterial "
+                                              f"interface (materials = (top, bottom), two different materials); "
+                                              f"with one material the shear faces move as +-delta/2")
+        if self.grid.plane and not ((c == 3 and 3 in active) or (c != 3 and set(active) & {1, 2})):
+            raise InputError("record.fields", f"{name!r} is not computed: in the plane problem the faces carry "
+                                              f"components 1 and 2 with an in-plane component active, 3 with "
+                                              f"the anti-plane one; active components are {active}")
 
     def _check_materials(self):
         """One material for both sides, or (top, bottom): stored as ``materials`` = (top,

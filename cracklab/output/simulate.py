@@ -9,6 +9,7 @@ import xarray as xr
 from .. import __version__
 from . import checkpoint
 from ..errors import InputError, SimulationError, StoreError, StoreWarning
+from ..model.record import face_field
 from ..model.scene_io import scene_from_data, scene_to_json
 from ..model.units import input_unit, unit
 from ..solver.stepper import Stepper
@@ -19,6 +20,9 @@ LONG_NAMES = {
     "v_2": ("opening rate", "velocity"), "v_3": ("slip rate along x3", "velocity"),
     "tau_1": ("shear traction along x1", "stress"), "tau_2": ("normal traction (tension positive)", "stress"),
     "tau_3": ("shear traction along x3", "stress"), "strength": ("strength of the interface", "stress"),
+    **{f"{k}_{c}_{side}": (f"{what} along x{c} of the {side} face (x2 = 0{'+' if side == 'top' else '-'})", kind)
+       for k, what, kind in (("u", "displacement", "length"), ("v", "velocity", "velocity"))
+       for side in ("top", "bottom") for c in (1, 2, 3)},
 }
 
 
@@ -36,11 +40,20 @@ def _input_attrs(scene, name):
     return {"long_name": f"scene input {section}.{key}", "units": input_unit(scene, section, key)}
 
 
-def _field(state, name):
+def _field(state, name, faces=None):
+    """The field ``name`` of ``state``; ``faces``: a dict that keeps the faces' fields of
+    this state once computed (one inverse transform per kind and step)."""
     if name == "strength":
         return state.strength
     if name in state.law_state:
         return state.law_state[name]
+    face = face_field(name)
+    if face is not None:
+        kind, side, c = face
+        faces = {} if faces is None else faces
+        if kind not in faces:
+            faces[kind] = state.faces(kind)
+        return faces[kind][side, c]
     kind, c = name.split("_")
     return {"delta": state.delta, "v": state.v, "tau": state.tau}[kind][int(c)]
 
@@ -64,7 +77,8 @@ class Recorder:
         self.s1, self.s3 = scene.record.region_slices(grid)
         self.nodes = scene.record.station_nodes(grid)
         comps = scene.components
-        self.station_fields = [f"{k}_{c}" for k in ("delta", "v", "tau") for c in comps] + ["strength"]
+        self.station_fields = [f"{k}_{c}" for k in ("delta", "v", "tau") for c in comps] + ["strength"] + \
+            [f for f in scene.record.fields if face_field(f)]
         self.series = {f: np.full((scene.nsteps + 1, len(self.nodes)), np.nan) for f in self.station_fields}
         # the arrays the end of the run writes (listed in the attrs: verification expects them)
         self.final_arrays = ["rupture_time"] + (
@@ -88,11 +102,12 @@ class Recorder:
         speed = np.sqrt(sum(v**2 for v in state.v.values()))
         new = np.isnan(self.rupture) & (speed > thr)
         self.rupture[new] = state.t
+        faces = {}
         for j, (i, k) in enumerate(self.nodes.values()):
             for f in self.station_fields:
-                self.series[f][state.n, j] = _field(state, f)[i, k]
+                self.series[f][state.n, j] = _field(state, f, faces)[i, k]
         if state.n in self.steps:
-            self.pending.append((state.t, {f: np.array(_field(state, f)[self.s1, self.s3])
+            self.pending.append((state.t, {f: np.array(_field(state, f, faces)[self.s1, self.s3])
                                            for f in self.scene.record.fields}))
             if self.store is not None and len(self.pending) >= self.flush_every:
                 self.flush()

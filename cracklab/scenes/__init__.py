@@ -1,5 +1,5 @@
 """Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
-SCEC TPV101 and TPV103 (rate-and-state friction), the plane test problems used in
+SCEC TPV6 (a bimaterial fault under a free surface), SCEC TPV101 and TPV103 (rate-and-state friction), the plane test problems used in
 verification, and the crack-growth problems of section 4 (a row of tough asperities,
 random toughness; see docs/scenes.md)."""
 from __future__ import annotations
@@ -22,7 +22,7 @@ UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 # ``np`` imported above) is reachable from a study; further builders are registered
 # explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
 BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv103", "asperity_row",
-            "random_toughness")
+            "random_toughness", "tpv6")
 
 
 def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
@@ -136,6 +136,67 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                  beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
+
+
+# ---------------------------------------------------------------------------- SCEC TPV6
+#: (strike offset from the hypocentre, depth below the free surface) in units of 100 m. The
+#: first five are the MDSBI reference's (shared/reference/tpv6_mdsbi/README.md: its files
+#: farstSSSdpDDD.txt and nearstSSSdpDDD.txt are the two sides of faultstSSSdpDDD).
+TPV6_REFERENCE_STATIONS = [(0, 0), (-120, 0), (120, 0), (-120, 75), (120, 75)]
+TPV6_STATIONS = TPV6_REFERENCE_STATIONS + [(0, 75), (-75, 75), (75, 75), (0, 120)]
+
+#: TPV6's two sides: the near, stiff one (x2 < 0, TPV3's rock) and the far, compliant one
+#: (x2 > 0: c_s and c_p 1.6 times smaller, density 1.2 times smaller)
+TPV6_NEAR = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
+TPV6_FAR = Material(mu=(2670.0 / 1.2) * (3464.0 / 1.6)**2, cs=3464.0 / 1.6, nu=0.25)
+
+
+def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
+    """SCEC TPV6 (see shared/reference/tpv6_mdsbi/README.md): a vertical strike-slip fault
+    between two materials, reaching a free surface; SI units.
+
+    ``materials`` = (far, near): the compliant far side is the top (x2 > 0), rho 2225 kg/m^3,
+    c_s 2165 m/s, c_p 3750 m/s; the near side below is TPV3's rock (2670, 3464, 6000). The
+    free surface is the line x3 = 0 by mirror symmetry (``Grid(free_surface=True)``): the
+    grid is the half plane x3 = depth in [0, L3], ``domain`` = (L1, L3) as in ``tpv5``. The
+    fault is 30 km along strike centred on the node x1 = L1/2, from the surface to 15 km
+    depth; the plane outside it is bonded. Initial tractions: tau0_1 = 70 MPa (the far side
+    moves in +x1), 81.6 MPa in the 3 km x 3 km nucleation square centred at the hypocentre
+    (strike 0, depth 7.5 km), put on the grid by cell area as in ``tpv3``; tau0_2 = -120 MPa
+    (compression). Linear slip weakening, mu_s 0.677, mu_d 0.525, D_c 0.40 m, with the
+    strength following the current normal traction (no sigma_n: slip changes the normal
+    stress on a bimaterial fault). Records ``TPV6_STATIONS`` (``faultst<strike>dp<depth>``
+    in units of 100 m, ``TPV6_REFERENCE_STATIONS`` the reference's) and the rupture time
+    (slip rate above 1 mm/s); ``record`` replaces that (add the faces' fields ``u_1_top``,
+    ... to record each side's motion). beta: at most 0.125 as ``tpv3``, relative to the
+    near side's c_s (it sets dt). See docs/tpv6.md."""
+    dx = check_positive("dx", dx)
+    try:
+        L1, L3 = (float(x) for x in domain)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
+    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
+    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
+             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+             f"L3 >= 15 km + dx), got {domain!r}")
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    xc, depth = grid.x1[n1 // 2], grid.x3
+    patch = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 1500.0),
+                     _tpv3_cell_fraction(depth - 7500.0, grid.dx3, 1500.0))
+    tau0 = 70.0e6 + (81.6e6 - 70.0e6) * patch
+    # |x1 - xc| <= 15 km, |x3| <= 15 km on the doubled cell: depth 0 to 15 km here
+    fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
+                     _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
+    law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, bonded=~fault)
+    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV6_STATIONS}
+    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
+    comps = (1, 2, 3)
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step")
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=TPV6_NEAR.nu))
+    return Scene(materials=(TPV6_FAR, TPV6_NEAR), grid=grid, law=law,
+                 loading=Loading(tau0_1=tau0, tau0_2=-120.0e6), t_end=t_end, beta=beta,
+                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv6")
 
 
 # ---------------------------------------------------------------------------- SCEC TPV101-104

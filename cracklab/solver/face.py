@@ -88,6 +88,16 @@ class Face:
                 self._F[name] = ch.H + ch.K * v[CHANNELS[name][1]]
         return self._combine()
 
+    def displacement(self, v: dict) -> dict:
+        """The face's displacement spectra {part: D_n} after step n, from its velocity ``v``
+        of that step (rotated spectra): each channel holds D_{n-1} + dt V_{n-1}/2 (Channel.dknown),
+        so D_n = dknown + dt V_n/2, the trapezoid of the slip update (50); 0 before step 1."""
+        out = {}
+        for part in v:
+            ch = self.channels[part]
+            out[part] = np.zeros_like(v[part]) if ch.dknown is None else ch.dknown + 0.5 * self.dt * v[part]
+        return out
+
     def wait(self) -> None:
         for ch in self.channels.values():
             ch.engine.wait()

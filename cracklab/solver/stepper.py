@@ -43,6 +43,10 @@ class State:
     tau: dict
     strength: np.ndarray
     law_state: dict
+    #: each face's own motion, ``faces(kind)`` -> {(side, component): field} with kind "u"
+    #: (displacement) or "v" (velocity) and side "top" or "bottom" (an inverse transform: for
+    #: what is recorded); None when the interface does not hold its faces apart (one material)
+    faces: object = None
 
 
 def _copy(x):
@@ -134,7 +138,15 @@ class Stepper:
             self.v, self.tau, self.n = v_new, tau, n + 1
             self._check(n, t, v_new, self.load.factor(t, length))
             yield State(n, t, self.delta, v_new, tau, np.broadcast_to(law.applied_strength(strength, tau), grid.shape),
-                        self.lstate)
+                        self.lstate, self._faces(v_new))
+
+    def _faces(self, v_new):
+        """``State.faces`` of this step: the interface's faces, their jump this step's delta or v."""
+        fields = getattr(self.response, "face_fields", None)
+        if fields is None:
+            return None
+        delta = self.delta
+        return lambda kind: fields(kind, delta if kind == "u" else v_new)
 
     def crack_length(self, state):
         """Mean crack length of constant-K loading for the law state ``state`` (None when

@@ -108,6 +108,37 @@ class Bimaterial(Interface):
         """After step (v): the faces' velocities of this step, for the next push."""
         self.v = self._split(self._rotated(v_new))
 
+    def face_fields(self, kind: str, jump: dict) -> dict:
+        """Each face's own motion after the last step: {(side, component): field}, side
+        "top" (x2 = 0+) or "bottom" (x2 = 0-), of its displacement (``kind`` "u") or velocity
+        ("v"), for the components the faces carry (1, 2, 3 in 3D; in plane 1, 2 with an
+        in-plane component, 3 with the anti-plane one). An inverse transform of the faces'
+        spectra (``v``, and the channels' displacement, ``Face.displacement``): call it only
+        for what is recorded. ``jump``: delta (kind "u") or its rate V ("v") of the same step,
+        {component: field}; it gives the uniform mode of components 1 and 3, which the rotated
+        spectra do not carry (q = 0 has no direction) and which the faces share as
+        u+ = eta- delta/(eta+ + eta-), u- = u+ - delta (neither face's history acts on it)."""
+        if kind not in ("u", "v"):
+            raise ValueError(f"kind must be 'u' or 'v', got {kind!r}")
+        zero = self._zero
+        comps = (1, 2, 3) if not self.fft.plane else \
+            (((1, 2) if "L" in self.parts else ()) + ((3,) if "T" in self.parts else ()))
+        shear = "L" if "L" in self.parts else "T"          # L and T share eta = mu / c_s
+        mean = {c: (self.fft.forward(np.asarray(jump[c], dtype=float), component=c).flat[0] if c in jump else 0.0)
+                for c in (1, 3) if c in comps}
+        out = {}
+        for side, face, v in zip(("top", "bottom"), self.faces, self.v):
+            spec = v if kind == "v" else face.displacement(v)
+            S1, S3 = rotate(self.c, self.s, spec.get("L", zero), spec.get("T", zero), inverse=True)
+            spectra = {c: np.array(x, dtype=complex) for c, x in ((1, S1), (2, spec.get("N", zero)), (3, S3))
+                       if c in comps}
+            share = self._wp[shear] if side == "top" else -self._wm[shear]
+            for c, m in mean.items():
+                spectra[c].flat[0] = share * m
+            fields = self.fft.inverse_components(spectra)
+            out.update({(side, c): fields[c] for c in comps})
+        return out
+
     def functional(self, delta, v_prev=None):
         raise NotImplementedError("the bimaterial interface runs the product scheme")
 
