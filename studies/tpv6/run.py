@@ -39,10 +39,24 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
 
-import compare as C  # noqa: E402
-from scene import ENGINE, FORMULATION, build_scene  # noqa: E402
+
+def _own(name):
+    """This study's module ``name`` (compare, scene) by its path: another study's module of
+    the same name (studies/tpv3/compare.py) may already be imported."""
+    import importlib.util
+
+    key = f"tpv6_study_{name}"
+    if key not in sys.modules:
+        spec = importlib.util.spec_from_file_location(key, HERE / f"{name}.py")
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[key] = mod
+        spec.loader.exec_module(mod)
+    return sys.modules[key]
+
+
+C = _own("compare")
+ENGINE, FORMULATION, build_scene = _own("scene").ENGINE, _own("scene").FORMULATION, _own("scene").build_scene
 
 REF_STATIONS = ("faultst000dp000", "faultst-120dp000", "faultst120dp000", "faultst-120dp075", "faultst120dp075")
 PRETTY = {"faultst000dp000": "faultst000dp000 (surface, above the hypocentre)",
@@ -390,7 +404,8 @@ def write_page(res, dxs, page, figrel, notes_path=None, command=None):
     text = f"""# SCEC TPV6 against MDSBI
 
 *Written by `studies/tpv6/run.py` from its own output; this version by `{cmd}`.
-Every number on this page comes from the runs in `out/tpv6/`.*
+Every number on this page comes from the runs in that command's output directory
+(`-o`, default `out/tpv6/`).*
 
 TPV6 (Harris et al. 2009) is TPV5's geometry with **two materials**: a 30 km x 15 km
 vertical strike-slip fault reaching a free surface, the far side (x2 > 0, cracklab's top)

@@ -254,7 +254,8 @@ RANGES = {
     ("numerics", "engine"): (st.text(max_size=10).filter(lambda s: s not in ("auto", "direct", "exponential")),
                              "must be one of"),
     ("record", "fields"): (st.lists(st.text(max_size=8), min_size=1, max_size=3).filter(
-        lambda fs: any(f not in cracklab.model.record.FIELDS for f in fs)), "accepted: delta_1"),
+        lambda fs: any(f not in cracklab.model.record.FIELDS + cracklab.model.record.FACE_FIELDS for f in fs)),
+        "accepted: delta_1"),
 }
 
 
