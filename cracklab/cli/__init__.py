@@ -36,12 +36,11 @@ def demo(out: str, scheduler, workers, no_lamb) -> None:
 
 def _load_scene(path: str):
     from ..errors import InputError
-    from ..model.scene_io import scene_from_data
 
     if path.endswith(".toml"):
-        from ..model.scene_io import read_toml_file
+        from ..model.scene_io import scene_from_toml_file
 
-        return scene_from_data(read_toml_file(path), {})
+        return scene_from_toml_file(path)    # file references relative to its directory
     import xarray as xr
 
     from ..output.simulate import scene_of
