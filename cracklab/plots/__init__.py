@@ -115,6 +115,19 @@ def _extent(ds):
     return ds["x1"].values, ds["x3"].values
 
 
+#: nodes per axis drawn at most: a larger grid is drawn every k-th node, so that a figure
+#: reads one thinned frame at a time whatever the store's size (bounded memory)
+MAX_NODES = 1024
+#: nodes per axis and frames of an animation at most
+GIF_NODES, GIF_FRAMES = 400, 200
+
+
+def _thin(ds, nodes=MAX_NODES):
+    """``ds`` (lazily) every k-th node along x1 and x3, k such that at most ``nodes`` remain."""
+    steps = {d: int(math.ceil(ds.sizes[d] / nodes)) for d in ("x1", "x3") if ds.sizes.get(d, 0) > nodes}
+    return ds.isel({d: slice(None, None, k) for d, k in steps.items()}) if steps else ds
+
+
 def _plane_image(ax, ds, values, *, cmap, vmin=None, vmax=None, norm=None):
     """pcolormesh of an (x1, x3) array with x1 across, x3 up, equal aspect."""
     x1, x3 = _extent(ds)
@@ -147,7 +160,7 @@ def _cmap_for(field):
 # ---------------------------------------------------------------------------- one run
 def snapshot(ds, field="delta_2", *, t=None, member=None, ax=None, path=None, cmap=None, robust=True):
     """``field`` over the plane at the snapshot nearest ``t`` (default: the last)."""
-    d = _member(ds, member)
+    d = _thin(_member(ds, member))
     if field not in d:
         raise ValueError(f"no field {field!r} in this result; recorded: "
                          f"{', '.join(v for v in d.data_vars if 't' in d[v].dims) or 'none'}")
@@ -173,7 +186,7 @@ def rupture_contours(ds, *, member=None, levels=10, ax=None, path=None, backgrou
                      colorbar=True):
     """Contours of ``rupture_time`` (the crack front every so often); with ``background``
     over the scene's tau_c field when it varies (asperities, random toughness)."""
-    d = _member(ds, member)
+    d = _thin(_member(ds, member))
     rt = d["rupture_time"].transpose("x1", "x3")
     fig, ax = _axes(ax)
     bg = None
@@ -460,21 +473,28 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
 
     The figure (axes, colour bar, labels) is drawn once; each frame redraws only the
     field and the time in the title (blitting) and goes to Pillow, as matplotlib's
-    PillowWriter does, so that a GIF of a few dozen frames takes about a second."""
+    PillowWriter does, so that a GIF of a few dozen frames takes about a second. Frames
+    are read one at a time, at most ``GIF_FRAMES`` of them on at most ``GIF_NODES`` nodes
+    per axis (bounded memory on any store)."""
     plt = _plt()
     from PIL import Image
 
-    d = _member(ds, member)
+    d = _thin(_member(ds, member), GIF_NODES)
     if field not in d or "t" not in d[field].dims or d.sizes["t"] == 0:
         raise ValueError(f"no snapshots of {field!r} to animate")
+    if d.sizes["t"] > GIF_FRAMES:       # every k-th snapshot, the last one kept
+        keep = np.unique(np.linspace(0, d.sizes["t"] - 1, GIF_FRAMES).round().astype(int))
+        d = d.isel(t=keep)
     da = d[field].transpose("t", "x1", "x3")
-    frames = np.asarray(da.values)
-    vmin, vmax = _robust(frames, 1.0, 99.5) if robust else (np.nanmin(frames), np.nanmax(frames))
+    # the colour range from a few frames, then one frame read at a time
+    sample = np.asarray(da.isel(t=np.unique(np.linspace(0, da.sizes["t"] - 1, 12).round().astype(int))).values)
+    vmin, vmax = _robust(sample, 1.0, 99.5) if robust else (np.nanmin(sample), np.nanmax(sample))
+    del sample
     if field.startswith(("tau", "v_")):
         m = max(abs(vmin), abs(vmax))
         vmin, vmax = -m, m
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=dpi, layout="constrained")
-    mesh = _plane_image(ax, d, frames[0], cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
+    mesh = _plane_image(ax, d, np.asarray(da.isel(t=0).values), cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
     fig.colorbar(mesh, ax=ax, label=_label(d, field), shrink=0.9)
     t = da["t"].values
     name = da.attrs.get("long_name", field)
@@ -488,7 +508,7 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
     mesh.set_visible(True)
     images = []
     for k in range(len(t)):
-        vals = frames[k]
+        vals = np.asarray(da.isel(t=k).values)
         if d.sizes["x3"] == 1:
             vals = np.repeat(vals, 2, axis=1)
         mesh.set_array(np.asarray(vals).T.ravel())
