@@ -140,9 +140,9 @@ NUMPY_SECTION = re.compile(r"^[ \t]*(Parameters|Returns|Yields|Raises|Warns|Note
 #: descriptions such as ``float > 0``, not names to link)
 NAPOLEON = Config(napoleon_use_param=False, napoleon_use_rtype=False, napoleon_use_ivar=True,
                   napoleon_preprocess_types=False)
+#: |x|, an absolute value in a docstring (reST would read a substitution)
 ABSOLUTE = re.compile(r"(?<![\\|])\|(?=[^|\s])([^|\n`]*?[^|\s\\])\|(?![|_])")
-
-
+#: a cross-reference role in a docstring
 ROLE = re.compile(r":(func|meth|class|data|attr|obj|exc|mod):`(~?)([\w.]+)`")
 
 
