@@ -63,7 +63,7 @@ def test_api_reference_has_every_public_name(site):
     for name in names:
         assert f'id="{name}"' in html, f"{name} has no entry in the API reference"
     # the full docstring, not only its first sentence: the last words of its last paragraph
-    text = " ".join(re.sub(r"<[^>]+>", " ", html).split())
+    text = " ".join(re.sub(r"<[^>]+>", "", html).split())
     last = " ".join(cracklab.simulate.__doc__.replace("``", "").split()[-6:])
     assert last in text, last
     from cracklab.cli import main
