@@ -71,7 +71,9 @@ def dask_client(client=None, scheduler=None, workers=None, n_tasks=None, memory_
     """The client to use: ``client``; else one connected to ``scheduler`` (or env
     DASK_SCHEDULER_ADDRESS); else an embedded LocalCluster of one-thread worker
     processes, one per core (at most one per task), that ignore Ctrl-C (the client
-    handles it); ``memory_limit``: of each worker (dask's)."""
+    handles it) and log only what is critical (a member's failure reaches the store through
+    its future; a worker losing the scheduler as the cluster closes on Ctrl-C printed a
+    traceback); ``memory_limit``: of each worker (dask's)."""
     if client is not None:
         yield client
         return
@@ -95,7 +97,7 @@ def dask_client(client=None, scheduler=None, workers=None, n_tasks=None, memory_
     options = {} if memory_limit == "auto" else {"memory_limit": memory_limit}
     with _children_ignore_sigint():
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                               silence_logs=logging.ERROR, env=env, **options)
+                               silence_logs=logging.CRITICAL, env=env, **options)
     c = Client(cluster)
     try:
         yield c

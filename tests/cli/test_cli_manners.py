@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -237,7 +238,9 @@ def test_ctrl_c_stops_a_sweep_without_worker_tracebacks(tmp_path):
         proc.kill()
     assert proc.returncode == 130, err
     lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert lines == ["cracklab: interrupted with 0 of 3 members complete; rerun the same command to resume"], err
+    # one line; how many members finished before the signal depends on the machine's speed
+    assert len(lines) == 1 and re.fullmatch(r"cracklab: interrupted with [0-2] of 3 members complete; rerun the "
+                                            r"same command to resume", lines[0]), err
 
 
 # ---------------------------------------------------------------------------- scheduler, bad files, stations
