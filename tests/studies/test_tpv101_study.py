@@ -236,3 +236,35 @@ def test_the_uguca_reference_reads():
     # the field is symmetric about the hypocentre (the README): 4.5 km up dip and down
     k_up, k_dn = int(np.argmin(np.abs(z + 4500))), int(np.argmin(np.abs(z - 4500)))
     assert rt[i, k_up] == pytest.approx(rt[i, k_dn], abs=1e-6)
+
+
+def test_the_page_finds_mirrored_stations_and_which_run_is_nearer():
+    page = _load("page")
+    assert page._mirror("faultst-090dp075") == {"faultst090dp075"}
+    assert page._mirror("faultst120dp030") == {"faultst-120dp030", "faultst120dp120", "faultst-120dp120"}
+    m = {"rupture_time": 3.0, "peak_rate": 4.0, "final_slip": 5.0}
+    run = {"stations": {s: dict(m) for s in STATIONS9}}
+    run["stations"]["faultst-120dp120"]["peak_rate"] = 4.25
+    assert page.symmetry({"runs": {"100": run}}) == {"rupture_time": 0.0, "peak_rate": 0.25, "final_slip": 0.0}
+    # cracklab 100 m 0.01 s from its 50 m run, uguca 0.03 s: cracklab is nearer; the peak
+    # slip rate changes more from 100 to 50 m than from 200 to 100 m: undecided
+    def cmp(sim, ref):
+        return {"sim": sim, "ref": ref}
+    uguca = {"100": {}, "50": {}}
+    conv = {}
+    for s in ("faultst000dp075", "faultst000dp030", "faultst090dp075"):
+        uguca["100"][s] = cmp({"rupture_time": 3.01, "peak_rate": 4.0, "final_slip": 5.0},
+                              {"rupture_time": 3.03, "peak_rate": 4.4, "final_slip": 5.1})
+        uguca["50"][s] = cmp({"rupture_time": 3.00, "peak_rate": 4.3, "final_slip": 5.0}, uguca["100"][s]["ref"])
+        conv[s] = {"rupture_time": {"pairs": [(200.0, 100.0, 0.02), (100.0, 50.0, 0.01)]},
+                   "peak_rate": {"pairs": [(200.0, 100.0, 0.1), (100.0, 50.0, -0.3)]},
+                   "final_slip": {"pairs": [(200.0, 100.0, 0.01), (100.0, 50.0, 0.0)]}}
+    res = {"uguca": uguca, "convergence": conv, "fields": {"100-50": {"rms": 0.01, "mean": 0.01}},
+           "uguca_field": {"50": {"rms": 0.03, "mean": 0.03}}}
+    text = page.which_converges(res)
+    rows = [r for r in text.splitlines() if r.startswith("| faultst")]
+    assert len(rows) == 9
+    assert all(r.endswith("| cracklab |") for r in rows if "rupture time" in r or "final slip" in r)
+    assert all("undecided" in r for r in rows if "peak rate" in r)
+    assert "nearer its 50 m value in 6, uguca's in 0; 3 cannot be told" in text
+    assert "cracklab's 100 m field is the nearer" in text
