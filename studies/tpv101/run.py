@@ -15,8 +15,8 @@ with its wall time in the .json next to it; then
   convergence between 100 and 50 m;
 
 and writes OUT/<problem>_results.json (every number of the page and the acceptance),
-docs/figures/<problem>_*.png and docs/<problem>.md. The acceptance (compare.check_tpv101,
-compare.check_tpv103) is the study's result: the script prints PASS or FAIL and exits 1
+docs/figures/<problem>_*.png and docs/<problem>.md. The acceptance (rs_compare.check_tpv101,
+rs_compare.check_tpv103) is the study's result: the script prints PASS or FAIL and exits 1
 when it fails, 2 when it could not be checked (a run missing).
 
 A finished store of the same scene is reused (``--force`` reruns), a killed run resumes
@@ -39,8 +39,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 sys.path.insert(0, str(HERE))
 
-import compare as C  # noqa: E402
-import runs as R  # noqa: E402
+import rs_compare as C  # noqa: E402
+import rs_runs as R  # noqa: E402
 
 DEFAULT_DX = {"tpv101": [200.0, 100.0, 50.0], "tpv103": [200.0, 100.0, 50.0]}
 T_END = {"tpv101": 15.0, "tpv103": 12.0}
@@ -319,7 +319,7 @@ def fig_convergence(res, figdir):
 
 
 # ------------------------------------------------------------------------------ page
-from page import write_page  # noqa: E402
+from rs_page import write_page  # noqa: E402
 
 
 def report(res):

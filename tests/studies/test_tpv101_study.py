@@ -1,4 +1,4 @@
-"""The TPV101/TPV103 study's comparison and acceptance (studies/tpv101/compare.py, run.py)
+"""The TPV101/TPV103 study's comparison and acceptance (studies/tpv101/rs_compare.py, run.py)
 on synthetic data with known answers, and the uguca reference files it reads."""
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def _load(name):
     return mod
 
 
-C = _load("compare")
+C = _load("rs_compare")
 
 
 def _pulse(dt=1e-3, t_r=2.345, peak=4.0, t_end=15.0, D=5.0):
@@ -213,7 +213,7 @@ def test_exit_status_follows_the_acceptance():
 
 
 def test_the_page_states_the_verdict_and_the_failures():
-    page = _load("page")
+    page = _load("rs_page")
     stations, field, runs, fields = _good()
     stations["faultst090dp075"] = _cmp(dpeak=0.2)
     res = {"acceptance": C.check_tpv101(stations, field, runs, fields)}
@@ -239,7 +239,7 @@ def test_the_uguca_reference_reads():
 
 
 def test_the_page_finds_mirrored_stations_and_which_run_is_nearer():
-    page = _load("page")
+    page = _load("rs_page")
     assert page._mirror("faultst-090dp075") == {"faultst090dp075"}
     assert page._mirror("faultst120dp030") == {"faultst-120dp030", "faultst120dp120", "faultst-120dp120"}
     m = {"rupture_time": 3.0, "peak_rate": 4.0, "final_slip": 5.0}

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import compare as C
+import rs_compare as C
 
 NAMES = {"tpv101": "TPV101", "tpv103": "TPV103"}
 
