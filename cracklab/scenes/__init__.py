@@ -1,5 +1,5 @@
 """Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
-SCEC TPV101 and TPV103 (rate-and-state friction), the plane test problems used in
+SCEC TPV101-TPV104 (rate-and-state friction; TPV102 and TPV104 below a free surface), the plane test problems used in
 verification, and the crack-growth problems of section 4 (a row of tough asperities,
 random toughness; see docs/scenes.md)."""
 from __future__ import annotations
@@ -21,8 +21,8 @@ UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 # these functions of this module, by name. No other name of the module (a helper, or
 # ``np`` imported above) is reachable from a study; further builders are registered
 # explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
-BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv103", "asperity_row",
-            "random_toughness")
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv102", "tpv103",
+            "tpv104", "asperity_row", "random_toughness")
 
 
 def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
@@ -159,15 +159,31 @@ def taper(x, W, w):
 TPV101_STATIONS = [(s, d) for d in (30, 75, 120) for s in ((-120, 0, 120) if d != 75 else (-90, 0, 90))]
 
 
-def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau0, dtau0):
-    """The geometry, load and records TPV101 and TPV103 share (whole space, periodic
-    ``domain`` with the hypocentre at its centre node). ``law`` maps the velocity-weakening
-    box B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) to the law."""
+#: depth of the hypocentre, the centre of the 15 km fault, below its top (and below the free
+#: surface of TPV102 and TPV104)
+TPV_HYPO_DEPTH = 7500.0
+
+
+def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau0, dtau0, free_surface=False):
+    """The geometry, load and records TPV101-104 share. Whole space (TPV101, TPV103): the
+    periodic ``domain`` with the hypocentre at its centre node. Half space (TPV102, TPV104):
+    the half plane of ``domain`` = (L1, depth L3) below the free surface x3 = 0 (mirror
+    symmetry), the hypocentre at the centre along strike and 7.5 km deep, so the fault's
+    top is the surface. ``law`` maps the velocity-weakening box
+    B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) (x, z from the hypocentre) to the law."""
     L1, L3 = domain
+    dx = check_positive("dx", dx)
     n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=free_surface)
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)       # c_p = sqrt(3) c_s = 6000 m/s
-    xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
+    xc = grid.x1[n1 // 2]
+    if free_surface:
+        if grid.L3 < 2 * TPV_HYPO_DEPTH + 3000.0:
+            raise InputError("domain", f"the depth L3 must reach below the fault and its 3 km transition "
+                                       f"(>= {2 * TPV_HYPO_DEPTH + 3000.0:g} m), got {grid.L3:g}")
+        zc = TPV_HYPO_DEPTH              # x3 is the depth; the hypocentre need not lie on a node
+    else:
+        zc = grid.x3[n3 // 2]
     box = np.outer(taper(grid.x1 - xc, 15000.0, 3000.0), taper(grid.x3 - zc, 7500.0, 3000.0))
     loading = Loading(tau0_1=tau0, nucleation_dtau_1=dtau0, nucleation_radius=3000.0, nucleation_time=1.0,
                       nucleation_x1=float(xc), nucleation_x3=float(zc))
@@ -181,6 +197,17 @@ def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau
                  units={"length": "m", "time": "s", "stress": "Pa"}, name=name)
 
 
+def _tpv101_law(box):
+    return RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
+                     V_ini=1e-12, evolution="ageing")
+
+
+def _tpv103_law(box):
+    outside = 1.0 - box
+    return RateState(a=0.01 + 0.01 * outside, b=0.014, L=0.4, V0=1e-6, f0=0.6, sigma_n=120e6, V_ini=1e-16,
+                     evolution="slip", f_w=0.2, V_w=0.1 + 0.9 * outside)
+
+
 def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
     """SCEC TPV101 (see shared/reference/tpv101_uguca/README.md): rate-and-state friction,
     ageing law, in a whole space. a = 0.008 + 0.008 (1 - B(x; 15 km, 3 km) B(z; 7.5 km, 3 km))
@@ -191,12 +218,21 @@ def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domai
     SI units; records SCEC's on-fault stations (faultst000dp075 the hypocentre; dp the depth
     below the top of the fault, x3 growing with depth) and the rupture time (slip rate above
     1 mm/s). beta: at most 0.25."""
-    def law(box):
-        return RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
-                         V_ini=1e-12, evolution="ageing")
-
     return _tpv_rate_state("tpv101", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
-                           domain=domain, law=law, tau0=75e6, dtau0=25e6)
+                           domain=domain, law=_tpv101_law, tau0=75e6, dtau0=25e6)
+
+
+def tpv102(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV102: :func:`tpv101` (ageing law) below a free surface. The grid is the half
+    plane of ``domain`` = (L1, depth L3) under the surface x3 = 0 (``Grid(free_surface=True)``,
+    mirror symmetry; x3 the depth, n3 + 1 nodes along it); the hypocentre lies at the centre
+    along strike, 7.5 km deep, so the velocity-weakening box reaches from the surface to
+    15 km depth, its transition B(z; 7.5 km, 3 km) below to 18 km. Stations by SCEC's names
+    at depth dp x 100 m (faultst000dp075 the hypocentre; each at its nearest node); the
+    rupture time. L3 at least 18 km (the default 36 km: the fault's image in the mirror line
+    x3 = L3 lies 36 km below it)."""
+    return _tpv_rate_state("tpv102", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=_tpv101_law, tau0=75e6, dtau0=25e6, free_surface=True)
 
 
 def tpv103(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
@@ -204,13 +240,15 @@ def tpv103(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domai
     whole space; the geometry, stations and records of :func:`tpv101`. a = 0.01 + 0.01 (1 - B B),
     b 0.014, L 0.4 m, f_w 0.2, V_w = 0.1 + 0.9 (1 - B B) m/s, V0 1e-6 m/s, f0 0.6, sigma_n
     120 MPa; tau0 40 MPa with V_ini = 1e-16 m/s; nucleation 45 MPa F(r) G(t), R 3 km, T 1 s."""
-    def law(box):
-        outside = 1.0 - box
-        return RateState(a=0.01 + 0.01 * outside, b=0.014, L=0.4, V0=1e-6, f0=0.6, sigma_n=120e6, V_ini=1e-16,
-                         evolution="slip", f_w=0.2, V_w=0.1 + 0.9 * outside)
-
     return _tpv_rate_state("tpv103", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
-                           domain=domain, law=law, tau0=40e6, dtau0=45e6)
+                           domain=domain, law=_tpv103_law, tau0=40e6, dtau0=45e6)
+
+
+def tpv104(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV104: :func:`tpv103` (slip law, strong velocity weakening) below a free
+    surface, with the half-plane geometry, depth convention and stations of :func:`tpv102`."""
+    return _tpv_rate_state("tpv104", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=_tpv103_law, tau0=40e6, dtau0=45e6, free_surface=True)
 
 
 # ---------------------------------------------------------------------------- section 4: crack growth
