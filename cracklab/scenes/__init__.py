@@ -1,5 +1,6 @@
-"""Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
-SCEC TPV101-TPV104 (rate-and-state friction; TPV102 and TPV104 below a free surface), the plane test problems used in
+"""Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3 and
+TPV5 (a free surface by mirror symmetry), SCEC TPV101-TPV104 (rate-and-state friction; TPV102
+and TPV104 below a free surface), the plane test problems used in
 verification, and the crack-growth problems of section 4 (a row of tough asperities,
 random toughness; see docs/scenes.md)."""
 from __future__ import annotations
@@ -21,7 +22,7 @@ UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 # these functions of this module, by name. No other name of the module (a helper, or
 # ``np`` imported above) is reachable from a study; further builders are registered
 # explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
-BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv102", "tpv103",
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv5", "tpv101", "tpv102", "tpv103",
             "tpv104", "asperity_row", "random_toughness")
 
 
@@ -136,6 +137,70 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                  beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
+
+
+# ---------------------------------------------------------------------------- SCEC TPV5
+#: (strike offset from the hypocentre, depth below the free surface) in units of 100 m.
+#: The first five are the MDSBI reference's records (shared/reference/tpv5_mdsbi/README.md):
+#: faultst000dp000 on the surface above the hypocentre, faultst000dp030 3 km below it,
+#: faultst000dp075 the hypocentre, faultst-075dp075 and faultst075dp075 the centres of the
+#: 78 MPa and 62 MPa patches. The others sample the rest of the fault (surface, deep edge).
+TPV5_REFERENCE_STATIONS = [(0, 0), (0, 30), (0, 75), (-75, 75), (75, 75)]
+TPV5_STATIONS = TPV5_REFERENCE_STATIONS + [(-75, 0), (75, 0), (-120, 0), (120, 0), (0, 120), (-120, 75),
+                                           (120, 75), (-120, 120), (120, 120)]
+
+#: the three 3 km x 3 km squares of TPV5 at depth 7.5 km: (strike centre in m, initial shear stress in Pa)
+TPV5_PATCHES = ((0.0, 81.6e6), (-7500.0, 78.0e6), (7500.0, 62.0e6))
+
+
+def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
+    """SCEC TPV5 (see shared/reference/tpv5_mdsbi/README.md): TPV3's fault reaching a free
+    surface, with two more stress patches; SI units.
+
+    The free surface is the line x3 = 0 by mirror symmetry (``Grid(free_surface=True)``):
+    the grid is the half plane x3 = depth in [0, L3] below it, ``domain`` = (L1, L3) with
+    L1 the periodic length along strike and L3 the depth of the half plane (the line
+    x3 = L3 is a mirror too, so the fault's image below it lies 2 (L3 - 15 km) from the
+    fault). The fault is 30 km along strike, centred on the node x1 = L1/2 (the hypocentre's
+    strike), from the surface to 15 km depth; the plane outside it is bonded. Initial shear
+    stress 70 MPa along strike except in three 3 km x 3 km squares centred at 7.5 km depth:
+    81.6 MPa at the hypocentre (nucleation: above the static strength 81.24 MPa), 78.0 MPa
+    at strike -7.5 km and 62.0 MPa at +7.5 km. Friction, normal stress and material as
+    :func:`tpv3`. Patches and fault edges are put on the grid by cell area as in ``tpv3``
+    (each node takes the fraction of its dx x dx cell inside the square; a node whose cell
+    leaves the fault is bonded; the surface node's cell is cut by the surface, whose image
+    continues the fault, so the fault's top row slips). Records the stations
+    ``TPV5_STATIONS``, named ``faultst<strike>dp<depth>`` in units of 100 m (faultst000dp000
+    on the surface above the hypocentre), and the rupture time (slip rate above 1 mm/s).
+    beta: at most 0.125, as ``tpv3``. See docs/tpv5.md."""
+    dx = check_positive("dx", dx)
+    try:
+        L1, L3 = (float(x) for x in domain)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
+    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
+    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
+             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+             f"L3 >= 15 km + dx), got {domain!r}")
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
+    xc = grid.x1[n1 // 2]
+    depth = grid.x3
+    rows = _tpv3_cell_fraction(depth - 7500.0, grid.dx3, 1500.0)
+    tau0 = np.full(grid.shape, 70.0e6)
+    for centre, stress in TPV5_PATCHES:
+        tau0 += (stress - 70.0e6) * np.outer(_tpv3_cell_fraction(grid.x1 - xc - centre, grid.dx1, 1500.0), rows)
+    # the fault is |x1 - xc| <= 15 km, |x3| <= 15 km on the doubled cell: depth 0 to 15 km here
+    fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
+                     _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
+    law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
+    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
+    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step")
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
+    return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
+                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv5")
 
 
 # ---------------------------------------------------------------------------- SCEC TPV101-104
