@@ -42,23 +42,28 @@ _TAP_TEMPS = {"product": 110, "other": 12}
 @dataclass(frozen=True)
 class MemoryEstimate:
     """Estimated bytes of one run, by part: ``history`` (the engines' states), ``work``
-    (work arrays of a step), ``records`` (what the recorder keeps in memory); ``steps``:
-    the run's number of steps."""
+    (work arrays of a step), ``setup`` (the temporaries of the largest engine's set-up,
+    its exact weights and fits, freed before the first step), ``records`` (what the
+    recorder keeps in memory); ``steps``: the run's number of steps."""
 
     history: int
     work: int
     records: int
     steps: int
+    setup: int = 0
 
     @property
     def total(self) -> int:
-        """Bytes of the run's arrays (the interpreter's own memory not included)."""
-        return self.history + self.work + self.records
+        """Bytes of the run's arrays at their peak (the interpreter's own memory not
+        included): the set-up's temporaries are counted on top of the rest, as the
+        states of the engines built before it are already held."""
+        return self.history + self.work + self.setup + self.records
 
     def describe(self) -> str:
-        """"about 1.2 GB (history 1.0 GB, work arrays 150 MB, records 20 MB)"."""
+        """"about 1.2 GB (history 1.0 GB, work arrays 150 MB, set-up 30 MB, records 20 MB)"."""
+        setup = f", set-up {fmt_bytes(self.setup)}" if self.setup else ""
         return (f"about {fmt_bytes(self.total)} (history {fmt_bytes(self.history)}, work arrays "
-                f"{fmt_bytes(self.work)}, records {fmt_bytes(self.records)})")
+                f"{fmt_bytes(self.work)}{setup}, records {fmt_bytes(self.records)})")
 
 
 def fmt_bytes(n: float) -> str:
@@ -167,7 +172,7 @@ def run_memory(scene, *, store=True) -> MemoryEstimate:
         + 10 * M * 8
     law_fields = sum(1 for v in vars(scene.law).values() if np.ndim(v) == 2) + 4
     load_fields = sum(1 for v in vars(scene.loading).values() if np.ndim(v) == 2)
-    work += (law_fields + load_fields) * N * 8 + building
+    work += (law_fields + load_fields) * N * 8
     rec = scene.record
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
     frame = n1r * n3r * 8 * len(rec.fields)
@@ -176,7 +181,7 @@ def run_memory(scene, *, store=True) -> MemoryEstimate:
     nstations = len(rec.stations or {})
     series = (scene.nsteps + 1) * nstations * (3 * nc + 1) * 8 * (2 if nstations else 0)
     records = kept * frame + series + 2 * N * 8
-    return MemoryEstimate(int(history), int(work), int(records), int(scene.nsteps))
+    return MemoryEstimate(int(history), int(work), int(records), int(scene.nsteps), setup=int(building))
 
 
 def _meminfo(key):

@@ -131,13 +131,17 @@ def test_an_8192_squared_scene_is_refused_before_any_step(tmp_path):
     elapsed = time.perf_counter() - t0
     line = error_line(res)
     assert line.startswith("Error: memory: the run of 'big' needs about "), line
-    assert "(history " in line and "GB is set by CRACKLAB_MEMORY_LIMIT=16GB; refused before any step" in line
+    assert "(history " in line and ", set-up " in line and "GB is set by CRACKLAB_MEMORY_LIMIT=16GB; refused before any step" in line
     total = budget.parse_bytes(line.split("needs about ")[1].split(" (")[0].replace(" ", ""))
     assert total > 40 << 30             # 33.6 M Fourier modes, 20 fitted terms each
     assert elapsed < 60, elapsed
     assert not out.exists()
     # the Python API refuses it the same way
     scene = cracklab.Scene.from_toml(BIG)
+    # the step's arrays (7 fields of 8192^2 doubles and a few spectra, about 15 GB) apart
+    # from the set-up's temporaries (the exact weights of every distinct |q|)
+    est = budget.run_memory(scene)
+    assert 8 << 30 < est.work < 20 << 30 and est.setup > est.work, est.describe()
     with pytest.raises(MemoryBudgetError, match="refused before any step"):
         os.environ[budget.LIMIT_ENV] = "16GB"
         try:
