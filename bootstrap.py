@@ -4,6 +4,7 @@
 Usage:
     python3 bootstrap.py test [pytest args...]   # default pytest args: -n 2
     python3 bootstrap.py demo [demo args...]     # runs `cracklab demo ...`
+    python3 bootstrap.py docs [sphinx args...]   # builds the site into docs/_build/html
 
 The environment lives in .venv and is installed from environment.lock (pinned,
 hashed), then the project itself is installed editable without dependencies.
@@ -30,7 +31,8 @@ STAMP = VENV / "cracklab-install.stamp"
 # Bump to force a reinstall when the install procedure itself changes.
 STAMP_FORMAT = "1"
 
-USAGE = "usage: python3 bootstrap.py {test|demo} [args...]"
+USAGE = "usage: python3 bootstrap.py {test|demo|docs} [args...]"
+SITE = ROOT / "docs" / "_build" / "html"
 
 
 def say(msg: str) -> None:
@@ -109,7 +111,7 @@ def exec_in_venv(argv: list[str]) -> NoReturn:
 def main(args: list[str]) -> None:
     if sys.version_info < (3, 11):
         fail(f"Python >= 3.11 required, this is {sys.version.split()[0]}")
-    if not args or args[0] not in ("test", "demo"):
+    if not args or args[0] not in ("test", "demo", "docs"):
         print(USAGE, file=sys.stderr)
         sys.exit(2)
     command, extra = args[0], args[1:]
@@ -121,9 +123,18 @@ def main(args: list[str]) -> None:
         say("running tests")
         pytest_args = extra if extra else ["-n", "2"]
         exec_in_venv([str(VENV_PYTHON), "-m", "pytest", *pytest_args])
-    else:
+    elif command == "demo":
         say("running demo")
         exec_in_venv([str(VENV / "bin" / "cracklab"), "demo", *extra])
+    else:
+        say(f"building the documentation site into {SITE.relative_to(ROOT)}")
+        # as CI builds it (tests/docs/test_site.py): warnings are errors, references checked
+        rc = subprocess.call([str(VENV_PYTHON), "-m", "sphinx", "-W", "--keep-going", "-n", "-b", "html",
+                              "-d", str(SITE.parent / "doctrees"), *extra, "docs", str(SITE)],
+                             cwd=ROOT, stdin=subprocess.DEVNULL)
+        if rc != 0:
+            fail("the site did not build (the messages above say why)", rc)
+        say(f"open {(SITE / 'index.html').as_uri()} in a browser")
 
 
 if __name__ == "__main__":

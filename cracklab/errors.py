@@ -90,3 +90,23 @@ class StoreError(RuntimeError):
 class StoreWarning(UserWarning):
     """A store was found damaged and is being repaired (a run redone from the start, an
     ensemble member recomputed); the message names the damaged files."""
+
+
+class MemoryBudgetError(InputError):
+    """A run (or a sweep's workers) would need more memory than is available: raised
+    before any step, with the estimate and the memory available (cracklab.solver.budget)."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by Ctrl-C (SIGINT) between two steps: ``step`` is the last step
+    taken, and the store's checkpoint holds the run after it (a resume continues there)."""
+
+    def __init__(self, step: int, store=None):
+        self.step = int(step)
+        self.store = None if store is None else str(store)
+        super().__init__(f"interrupted at step {self.step}")
+
+
+class SchedulerError(InputError):
+    """The dask scheduler of a sweep cannot be reached (raised within a few seconds,
+    before the store is touched); ``field`` names the option or variable that gave it."""

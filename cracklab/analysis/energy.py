@@ -231,6 +231,13 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
         scene = scene_of(ds)
     grid, mat, law, load = scene.grid, scene.material, scene.law, scene.loading
     comps = scene.components
+    if scene.materials[0] != scene.materials[1]:
+        raise InputError("materials", "energy_budget covers an interface between two half spaces of one material; "
+                                      "this scene has two (the bimaterial budget is not implemented)")
+    if grid.free_surface:
+        raise InputError("grid.free_surface", "energy_budget covers the periodic plane; a half plane below a "
+                                              "free surface (mirror symmetry) is not implemented: run the doubled "
+                                              "whole-space scene with mirrored loads for its budget")
     for name in [f"delta_{c}" for c in comps] + [f"tau_{c}" for c in comps]:
         if name not in ds:
             raise InputError("record.fields", f"energy_budget needs {name!r} recorded on the whole plane; "

@@ -465,16 +465,18 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
         by the other integrations.  Two passes are less stable than one (mode II
         grows from gamma ~ 2; docs/stability.md).
 
-    The grid's product scheme is (velocity, product, predictor-corrector, one pass):
-    second order, and its single-mode response does not grow for modes I, II, III up
-    to gamma = 2.5. :data:`STABLE_SCHEME` is its piecewise-cubic variant (fourth order,
-    up to gamma = 2.6), which runs here only (docs/stability.md).
-
     Returns
     -------
     xarray.DataArray named "r" on coordinate "T" = n gamma, n = 0..N.  If the
     recurrence overflows, the remaining values are NaN and the attribute
     ``nonfinite_from_T`` records where.  See the module docstring for the recurrences.
+
+    Notes
+    -----
+    The grid's product scheme is (velocity, product, predictor-corrector, one pass):
+    second order, and its single-mode response does not grow for modes I, II, III up
+    to gamma = 2.5. :data:`STABLE_SCHEME` is its piecewise-cubic variant (fourth order,
+    up to gamma = 2.6), which runs here only (docs/stability.md).
     """
     mode = _choice("mode", mode, MODES)
     gamma = _positive("gamma", gamma)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-STUDY = Path(__file__).resolve().parents[1] / "studies" / "asperity_ensemble" / "study.toml"
+STUDY = Path(__file__).resolve().parents[2] / "studies" / "asperity_ensemble" / "study.toml"
 
 
 def _say(msg):

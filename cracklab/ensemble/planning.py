@@ -72,6 +72,42 @@ def _classify(key, accepted, varkw, where, builder):
                                        f"{', '.join(sorted(accepted))}) nor a scene path <section>.<key>")
 
 
+def _numeric_text(value) -> bool:
+    """True for a string that reads as a number ("0.1", "2", "1e3"): a value typed in quotes."""
+    if not isinstance(value, str):
+        return False
+    try:
+        float(value)
+    except ValueError:
+        return False
+    return True
+
+
+def _check_type(key, value, kind, default, where):
+    """A parameter value of the wrong type, refused before any member runs: a number in
+    quotes ("0.1"), or text or a boolean for a builder argument whose default is a number."""
+    text_ok = isinstance(default, str) or key == "name"
+    values = value if isinstance(value, (list, tuple)) else [value]
+    for v in values:
+        if _numeric_text(v) and not text_ok:
+            raise InputError(f"{where}.{key}", f"must be a number, got the text {v!r} (a string in quotes): "
+                                               f"write {v} without quotes")
+    if kind == "arg" and isinstance(default, (int, float)) and not isinstance(default, bool) \
+            and isinstance(value, (str, bool)):
+        raise InputError(f"{where}.{key}", f"must be a number (the builder's default is {default!r}), got "
+                                           f"{value!r} ({type(value).__name__})")
+
+
+def _defaults(func) -> dict:
+    import inspect
+
+    try:
+        sig = inspect.signature(func)
+    except (TypeError, ValueError):
+        return {}
+    return {p.name: p.default for p in sig.parameters.values() if p.default is not inspect.Parameter.empty}
+
+
 def plan(base_scene, sweep) -> list[Member]:
     """The members of a sweep, in order (product first, then explicit members), with
     resolved parameters and ids. Unknown parameter names fail here, before any work;
@@ -112,23 +148,26 @@ def plan(base_scene, sweep) -> list[Member]:
         if builder is not None:
             func = resolve_builder(builder, f"{where}.builder" if "builder" in given else "builder")
             accepted, varkw = accepts(func)
+            defaults = _defaults(func)
         else:
-            accepted, varkw = set(), False
+            accepted, varkw, defaults = set(), False, {}
         params = {}
         if builder is not None:
             params["builder"] = builder
         for key, value in base_args.items():
             try:
-                _classify(key, accepted, varkw, "base", builder)
+                kind = _classify(key, accepted, varkw, "base", builder)
             except InputError:
                 if builder != default_builder:
                     continue        # base arguments of the study's builder another builder lacks
                 raise
+            _check_type(key, value, kind, defaults.get(key), "base")
             params[key] = canonical(value, f"base.{key}")
         for key, value in given.items():
             if key == "builder":
                 continue
-            _classify(key, accepted, varkw, where, builder)
+            kind = _classify(key, accepted, varkw, where, builder)
+            _check_type(key, value, kind, defaults.get(key), where)
             params[key] = canonical(value, f"{where}.{key}")
         swept = [k for k in given if k != "builder" or given["builder"] != default_builder]
         seeded = builder is not None and sweep.seed_arg in accepted and sweep.seed_arg not in params \
@@ -165,6 +204,67 @@ def _field_value(section, value):
     return value
 
 
+def check_paths(scene, paths: dict, where: str | None = None):
+    """Refuse a scene path that names no key of ``scene`` (with the nearest key as a
+    suggestion: law.tauc -> law.tau_c) or gives text where the scene holds a number;
+    ``where``: the study table the paths come from (sweep, members[2], ...), for the message."""
+    import difflib
+
+    for key, value in paths.items():
+        if not _is_path(key):
+            continue
+        section, _, name = key.partition(".")
+        obj = getattr(scene, section, None)
+        if obj is None or not dataclasses.is_dataclass(obj):
+            continue
+        known = [f.name for f in dataclasses.fields(obj)]
+        field = f"{where}.{key}" if where else key
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+            hint = f"did you mean {section}.{close[0]}? " if close else ""
+            raise InputError(field, f"unknown key for {type(obj).__name__}; {hint}accepted: "
+                                    f"{', '.join(sorted(known))}")
+        current = getattr(obj, name)
+        if isinstance(decode(value), str) and (isinstance(current, (int, float, np.ndarray))
+                                               and not isinstance(current, bool)):
+            raise InputError(field, f"must be a number (the scene has {type(current).__name__} "
+                                    f"{current if np.ndim(current) == 0 else 'a field'}), got the text {value!r}")
+
+
+def _section_classes(section):
+    """The classes a scene's ``section`` may be (every law's for "law")."""
+    from ..model.grid import Grid
+    from ..model.loading import Loading
+    from ..model.material import Material
+    from ..model.record import Record
+    from ..model.scene import Numerics
+
+    if section == "law":
+        from ..laws import LAWS
+
+        return list(LAWS.values())
+    return [{"material": Material, "grid": Grid, "loading": Loading, "record": Record,
+             "numerics": Numerics}[section]]
+
+
+def check_section_keys(key: str, value, where: str | None = None):
+    """``check_paths`` without a scene: the key must name a field of its section's class
+    (of some law for law.*), with the nearest one suggested."""
+    import difflib
+
+    if not _is_path(key):
+        return
+    section, _, name = key.partition(".")
+    classes = _section_classes(section)
+    known = sorted({f.name for c in classes for f in dataclasses.fields(c)})
+    if name not in known:
+        close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
+        hint = f"did you mean {section}.{close[0]}? " if close else ""
+        what = "any law" if section == "law" else classes[0].__name__
+        raise InputError(f"{where}.{key}" if where else key, f"unknown key for {what}; {hint}accepted: "
+                                                              f"{', '.join(known)}")
+
+
 def apply_paths(scene, paths: dict):
     """``scene`` with the scene paths ``{"law.tau_c": 2.0, "beta": 0.4, ...}`` set; every
     changed part is rebuilt with ``dataclasses.replace`` and so validated again."""
@@ -178,16 +278,19 @@ def apply_paths(scene, paths: dict):
             top[key] = value
         else:
             raise InputError(key, "is not a scene path")
+    check_paths(scene, paths)
     changes = dict(top)
     for section, values in sections.items():
-        obj = getattr(scene, section)
-        known = {f.name for f in dataclasses.fields(obj)}
-        for name in values:
-            if name not in known:
-                raise InputError(f"{section}.{name}", f"unknown key for {type(obj).__name__}; accepted: "
-                                                      f"{', '.join(sorted(known))}")
-        changes[section] = dataclasses.replace(obj, **values)
+        changes[section] = dataclasses.replace(getattr(scene, section), **values)
     return scene.replace(**changes) if changes else scene
+
+
+def split_params(func, params: dict) -> tuple[dict, dict]:
+    """(builder arguments, scene paths) of a member's parameters (without "builder")."""
+    accepted, varkw = accepts(func)
+    args = {k: decode(v) for k, v in params.items() if k != "builder" and not _is_path(k)
+            and (k in accepted or varkw)}
+    return args, {k: v for k, v in params.items() if k != "builder" and k not in args}
 
 
 def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1, builders: dict | None = None):
@@ -204,9 +307,7 @@ def build_scene(base_scene, params: dict, *, fft_threads: int | None = 1, builde
         name = params.pop("builder")
         func = (builders or {}).get(name) if isinstance(name, str) else None
         func = func or resolve_builder(name)
-        accepted, varkw = accepts(func)
-        args = {k: decode(v) for k, v in params.items() if not _is_path(k) and (k in accepted or varkw)}
-        paths = {k: v for k, v in params.items() if k not in args}
+        args, paths = split_params(func, params)
         scene = func(**args)
         if not isinstance(scene, Scene):
             raise InputError("builder", f"must return a cracklab.Scene, got {type(scene).__name__}")

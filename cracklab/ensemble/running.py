@@ -11,10 +11,11 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import InputError, SchedulerError
 from .builders import builder_name, resolve_builder
 from .identity import canonical, canonical_json, scene_digest
 from .lock import store_lock
-from .planning import as_sweep, build_scene, plan
+from .planning import as_sweep, build_scene, check_paths, check_section_keys, plan, split_params
 from .spec import Builder, Member, Sweep, SweepResult
 from .store import (MEMBERS, SWAP_TAG, check_store, damage_of, error_line, init_store, is_complete,
                     member_attrs, member_path, open_group, record_failure, store_str, swap_in,
@@ -29,11 +30,50 @@ def cores() -> int:
         return os.cpu_count() or 1
 
 
+#: seconds to reach a dask scheduler before the sweep gives up (nothing is written by then)
+CONNECT_TIMEOUT = 5.0
+
+
+def connect(address, *, where="scheduler", timeout=CONNECT_TIMEOUT):
+    """A Client of the dask scheduler at ``address``; a SchedulerError within ``timeout``
+    seconds when it cannot be reached (``where``: the option or variable that gave it)."""
+    from distributed import Client
+
+    from .store import error_line
+
+    try:
+        return Client(address, timeout=timeout)
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        raise SchedulerError(where, f"cannot connect to the dask scheduler at {address!r} within {timeout:g} s "
+                                    f"({error_line(exc)}); check the address (e.g. tcp://HOST:8786) and that the "
+                                    f"scheduler runs, or leave it out to use a local cluster") from None
+
+
 @contextlib.contextmanager
-def dask_client(client=None, scheduler=None, workers=None, n_tasks=None):
+def _children_ignore_sigint():
+    """Start processes that ignore Ctrl-C (SIGINT): the workers of an embedded cluster,
+    whose interruption the client handles (no worker prints a traceback)."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+@contextlib.contextmanager
+def dask_client(client=None, scheduler=None, workers=None, n_tasks=None, memory_limit="auto"):
     """The client to use: ``client``; else one connected to ``scheduler`` (or env
     DASK_SCHEDULER_ADDRESS); else an embedded LocalCluster of one-thread worker
-    processes, one per core (at most one per task)."""
+    processes, one per core (at most one per task), that ignore Ctrl-C (the client
+    handles it) and log only what is critical (a member's failure reaches the store through
+    its future; a worker losing the scheduler as the cluster closes on Ctrl-C printed a
+    traceback); ``memory_limit``: of each worker (dask's)."""
     if client is not None:
         yield client
         return
@@ -43,7 +83,7 @@ def dask_client(client=None, scheduler=None, workers=None, n_tasks=None):
 
     address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
     if address:
-        c = Client(address)
+        c = connect(address, where="scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS")
         try:
             yield c
         finally:
@@ -54,8 +94,10 @@ def dask_client(client=None, scheduler=None, workers=None, n_tasks=None):
         n = max(1, min(n, n_tasks))
     env = {"CRACKLAB_FFT_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
            "OPENBLAS_NUM_THREADS": "1"}
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                           silence_logs=logging.ERROR, env=env)
+    options = {} if memory_limit == "auto" else {"memory_limit": memory_limit}
+    with _children_ignore_sigint():
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.CRITICAL, env=env, **options)
     c = Client(cluster)
     try:
         yield c
@@ -64,8 +106,98 @@ def dask_client(client=None, scheduler=None, workers=None, n_tasks=None):
         cluster.close()
 
 
+def _where(key, sweep) -> str:
+    """The study table a parameter comes from (for messages): sweep, base or members."""
+    if sweep is not None and key in sweep.product:
+        return "sweep"
+    if sweep is not None and key in (sweep.base or {}):
+        return "base"
+    return "members"
+
+
+def preflight(base_scene, members, *, fft_threads=1, sweep=None) -> dict:
+    """Check every member before any work starts, in this process: its scene paths name
+    keys of the scene's sections, with values of the right type (an unknown key, with the
+    nearest one suggested, or text for a number raises InputError naming the key). The
+    members of a base Scene or of cracklab's own builders (``scenes.BUILDERS``) are built
+    here, and checked against their scene; other builders run on the workers only (they
+    may be slow or need the worker), their law keys checked against every law's.
+    Returns {member id: MemoryEstimate, or None when not built here or when the build
+    fails on a bad value: such a member fails on its worker and is recorded}."""
+    from ..model.scene import Scene
+    from ..solver.budget import run_memory
+    from .builders import _own_builders
+
+    own = _own_builders()
+    out, built = {}, {}
+    for m in members:
+        params = dict(m.params)
+        name = params.pop("builder", None)
+        if isinstance(base_scene, Scene):
+            key, paths = "base", params
+            make = lambda: base_scene  # noqa: E731
+        else:
+            func = resolve_builder(name)
+            args, paths = split_params(func, params)
+            if own.get(name) is not func:
+                for k, v in paths.items():
+                    check_section_keys(k, v, where=_where(k, sweep))
+                out[m.id] = None
+                continue
+            key = canonical_json({"builder": name, **canonical(args)})
+            make = lambda: func(**args)  # noqa: E731
+        if key not in built:
+            try:
+                built[key] = make()
+            except InputError:
+                built[key] = None
+        scene = built[key]
+        if not isinstance(scene, Scene):
+            for k, v in paths.items():
+                check_section_keys(k, v, where=_where(k, sweep))
+            out[m.id] = None
+            continue
+        for k in paths:
+            check_paths(scene, {k: paths[k]}, where=_where(k, sweep))
+        try:
+            member = build_scene(scene, paths, fft_threads=fft_threads)
+        except InputError:
+            out[m.id] = None
+            continue
+        out[m.id] = run_memory(member)
+    return out
+
+
+def _workers_for(estimates, todo, workers, local):
+    """The number of workers of an embedded cluster that fit in memory with the largest
+    members (``workers`` given: refused when they do not fit); (n, dask memory limit)."""
+    from ..solver.budget import PROCESS_BYTES, check_memory
+
+    known = sorted((e for m in todo if (e := estimates.get(m.id)) is not None), key=lambda e: -e.total)
+    if not known:
+        return None, "auto"
+    largest = known[0]
+    hint = "pass --workers with fewer workers, make the grids coarser or the runs shorter, or --no-memory-check"
+    if not local:
+        check_memory(largest, what="the largest member", hint=hint)
+        return None, "auto"
+    n = max(1, min(workers or cores(), len(todo)))
+    if workers is None:
+        from ..solver.budget import available_memory
+
+        avail, _ = available_memory()
+        while n > 1 and n * (largest.total + PROCESS_BYTES) > avail:
+            n -= 1
+    check_memory(largest, processes=n, what=f"the sweep on {n} worker process{'es' if n > 1 else ''}", hint=hint)
+    limit = int(1.5 * (largest.total + PROCESS_BYTES))
+    total = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 0
+    if total and limit <= total // n:
+        return n, "auto"                   # dask's own limit (memory / workers) leaves room enough
+    return n, limit
+
+
 def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, workers=None,
-        progress=None, fft_threads=1, study_spec=None) -> SweepResult:
+        progress=None, fft_threads=1, study_spec=None, overwrite=False, check_memory=True) -> SweepResult:
     """Run every member of ``sweep`` over ``base_scene`` into the Zarr v3 ``store``.
 
     ``base_scene``: a Scene (parameters are scene paths), a ``Builder``, or a builder
@@ -79,23 +211,131 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     traceback). ``progress``: a bar over members (default: when stderr is a terminal).
     ``fft_threads``: numerics.fft_threads of every member that does not set it (None: as
     built). Holds the store's sweep lock while it runs: a second sweep into the same
-    store at the same time raises ``StoreLocked`` (see ``store_lock``)."""
+    store at the same time raises ``StoreLocked`` (see ``store_lock``).
+
+    Before anything is written or any worker starts, every member is checked
+    (``preflight``: scene paths and parameter types), the scheduler is reached (a
+    ``SchedulerError`` within ``CONNECT_TIMEOUT`` seconds) and, with ``check_memory``,
+    the members' memory is set against the memory available (``MemoryBudgetError``; an
+    embedded cluster gets no more workers than fit). A store holding the ensemble of
+    another study (another name or base) is refused unless ``overwrite``, which deletes
+    its members first."""
     t0 = time.perf_counter()
     sweep = as_sweep(sweep)
     members = plan(base_scene, sweep)
     store = store_str(store)
     spec = study_spec or _spec_of(base_scene, sweep)
     check_store(store)                  # before the lock: a wrong path is left untouched
-    with store_lock(store):
-        return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
-                           scheduler=scheduler, workers=workers, progress=progress,
-                           fft_threads=fft_threads)
+    replace = _check_same_study(store, spec, overwrite)
+    estimates = preflight(base_scene, members, fft_threads=fft_threads, sweep=sweep)
+    todo = [m for m in members if replace or not resume or not is_complete(store, m.id)]
+    synchronous = client is None and scheduler == "synchronous"
+    address = None if client is not None or synchronous else (scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS"))
+    memory_limit = "auto"
+    if check_memory and todo:
+        if synchronous:
+            known = [e for m in todo if (e := estimates.get(m.id)) is not None]
+            if known:
+                from ..solver.budget import check_memory as fits
+
+                fits(max(known, key=lambda e: e.total), what="the largest member",
+                     hint="make the grids coarser or the runs shorter, or --no-memory-check")
+        elif client is None and not address:
+            n, memory_limit = _workers_for(estimates, todo, workers, local=True)
+            if n is not None and workers is None and n < min(cores(), len(todo)):
+                workers = n
+                if progress is not False:
+                    print(f"cracklab: {n} worker process{'es' if n > 1 else ''} (as many as the memory holds "
+                          f"with the largest member)", file=sys.stderr, flush=True)
+    own = None
+    if address:                         # reached before the store is touched
+        own = connect(address, where="scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS")
+        client = own
+        if check_memory and todo:
+            _check_remote_memory(own, estimates, todo)
+    try:
+        with store_lock(store):
+            return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
+                               scheduler=scheduler, workers=workers, progress=progress,
+                               fft_threads=fft_threads, replace=replace, memory_limit=memory_limit,
+                               address=address)
+    finally:
+        if own is not None:
+            own.close()
+
+
+def _identity(spec: dict) -> tuple:
+    """What makes two sweeps the same study: its name and its builder or base scene (the
+    base arguments and the sweep axes may change: members of both are kept)."""
+    study = spec.get("study") if isinstance(spec.get("study"), dict) else None
+    if study is not None:
+        return spec.get("name"), study.get("builder"), study.get("scene")
+    return spec.get("name"), json.dumps(spec.get("base"), sort_keys=True)
+
+
+def _check_same_study(store: str, spec: dict, overwrite: bool) -> bool:
+    """True when ``store`` holds the ensemble of another study and ``overwrite`` lets it be
+    replaced; InputError when it does and ``overwrite`` is not given."""
+    from .store import open_group as group
+
+    try:
+        attrs = dict(group(store, "r").attrs)
+    except Exception:  # noqa: BLE001 - no store yet
+        return False
+    if "cracklab_ensemble" not in attrs:
+        return False
+    try:
+        old = json.loads(attrs.get("study", "{}"))
+    except ValueError:
+        old = {}
+    if _identity(old) == _identity(spec):
+        return False
+    if not overwrite:
+        name = old.get("name", "?")
+        raise InputError("store", f"{store} holds the ensemble of another study ({name!r}: "
+                                  f"{_identity(old)[1] or 'a base scene'}); refusing to mix or replace it: choose "
+                                  f"another output path, or --overwrite (ensemble.run(overwrite=True)) to replace it")
+    if "://" in store:
+        raise InputError("store", f"{store}: --overwrite replaces local stores only; delete it first")
+    return True
+
+
+def _check_remote_memory(client, estimates, todo):
+    """Refuse members larger than every worker's dask memory limit (when the workers have one)."""
+    from ..errors import MemoryBudgetError
+    from ..solver.budget import PROCESS_BYTES, fmt_bytes
+
+    try:
+        limits = [w.get("memory_limit") or 0 for w in client.scheduler_info().get("workers", {}).values()]
+    except Exception:  # noqa: BLE001 - no information: the workers check their own runs
+        return
+    known = [e for m in todo if (e := estimates.get(m.id)) is not None]
+    if not limits or not known or min(limits) == 0:
+        return
+    largest = max(known, key=lambda e: e.total)
+    if largest.total + PROCESS_BYTES > max(limits):
+        raise MemoryBudgetError("memory", f"the largest member needs {largest.describe()} (and its worker about "
+                                          f"{fmt_bytes(PROCESS_BYTES)} more), but the scheduler's workers have at "
+                                          f"most {fmt_bytes(max(limits))} each (dask memory_limit); refused before "
+                                          f"any member runs")
+
+
+def _clear(store: str):
+    """Delete the members of an ensemble store and its list of them (``overwrite``)."""
+    import shutil
+
+    shutil.rmtree(Path(store) / MEMBERS, ignore_errors=True)
+    from .store import open_group as group
+
+    group(store, "a").update_attributes({"members": []})
 
 
 def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
-                progress, fft_threads) -> SweepResult:
+                progress, fft_threads, replace=False, memory_limit="auto", address=None) -> SweepResult:
     from ..model.scene import Scene
 
+    if replace:
+        _clear(store)
     init_store(store, spec, members, axes=list(sweep.product))
     todo, damaged = [], {}
     for m in members:
@@ -135,14 +375,13 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         from distributed import as_completed
         from tqdm import tqdm
 
-        if progress and client is None:
-            address = scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS")
+        if progress and (client is None or address):
             n = max(1, min(workers or cores(), len(todo)))
             print(f"cracklab: {len(todo)} member{'s' if len(todo) != 1 else ''} to run; " +
-                  (f"connecting to {address}" if address else
-                   f"starting a local cluster of {n} worker process{'es' if n > 1 else ''}"),
+                  (f"on the scheduler at {address}" if address else "on the given client" if client is not None
+                   else f"starting a local cluster of {n} worker process{'es' if n > 1 else ''}"),
                   file=sys.stderr, flush=True)
-        with dask_client(client, scheduler, workers, len(todo)) as c:
+        with dask_client(client, scheduler, workers, len(todo), memory_limit=memory_limit) as c:
             base_arg = c.scatter(base, broadcast=True) if base is not None else None
             futures = {c.submit(_run_member, store, m, base_arg, fft_threads, own(m), pure=False,
                                 key=f"cracklab-member-{m.id}-{os.urandom(3).hex()}"): m for m in todo}

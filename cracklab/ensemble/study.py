@@ -43,7 +43,7 @@ def load_study(path) -> Study:
         [[members]]                     # explicit members (merged over [base])
         builder = "random_toughness"
     """
-    from ..model.scene_io import read_toml_file, scene_from_data
+    from ..model.scene_io import read_toml_file, scene_from_toml_file
 
     path = Path(path)
     if not path.exists():
@@ -77,7 +77,7 @@ def load_study(path) -> Study:
         scene_path = (path.parent / study["scene"])
         if not scene_path.is_file():
             raise InputError("study.scene", f"no such scene file {scene_path}")
-        builder = scene_from_data(read_toml_file(scene_path, "study.scene"))
+        builder = scene_from_toml_file(scene_path, "study.scene")
     for key in ("name", "seed_arg", "description"):
         if key in study and not isinstance(study[key], str):
             raise InputError(f"study.{key}", f"must be a string, got {study[key]!r}")

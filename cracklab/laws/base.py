@@ -39,16 +39,31 @@ UNITS = ("stress", "length", "velocity", "time", "1")
 KINDS = ("field", "mask", "scalar", "option")
 
 
-def parameter(*, unit: str = "1", kind: str = "field", default=dataclasses.MISSING):
-    """A law parameter: a dataclass field that carries its unit and kind (see module doc)."""
+#: the accepted ranges a number or field parameter declares (``parameter(accepted=...)``,
+#: optionally followed by "; " and a condition that involves other keys), every value of a
+#: field in it: what docs/toml.md shows, and what tests/docs/test_toml_page.py holds the
+#: law's own checks to
+RANGES = ("> 0", ">= 0", ">= 0 or inf", "finite")
+
+
+def parameter(*, unit: str = "1", kind: str = "field", default=dataclasses.MISSING, accepted: str | None = None,
+              doc: str = ""):
+    """A law parameter: a dataclass field that carries its unit and kind (see module doc),
+    its accepted range (one of :data:`RANGES` for a number or a field, then optionally "; "
+    and a condition on other keys; free text for an option; None for a mask) and a
+    one-line meaning ``doc`` (both for docs/toml.md)."""
     if unit not in UNITS or kind not in KINDS:
         raise ValueError(f"unit must be one of {UNITS} and kind one of {KINDS}, got {unit!r}, {kind!r}")
-    return dataclasses.field(default=default, metadata={"unit": unit, "kind": kind})
+    if kind in ("field", "scalar") and (accepted or "").split(";")[0] not in RANGES:
+        raise ValueError(f"a {kind} parameter declares its range, one of {RANGES} (then, after a ';', what "
+                         f"else it must satisfy), got {accepted!r}")
+    return dataclasses.field(default=default, metadata={"unit": unit, "kind": kind, "accepted": accepted,
+                                                        "doc": doc})
 
 
 def bonded_mask():
     """The ``bonded`` parameter every law has: a boolean (n1, n3) mask, or None."""
-    return parameter(kind="mask", default=None)
+    return parameter(kind="mask", default=None, doc="points that never move (true: bonded)")
 
 
 def check_parameter(law, name, lower=0.0, allow_equal=False, allow_inf=False):
@@ -158,6 +173,12 @@ class Law:
         """Fracture energy per unit area reached (an array over the plane) in the rebuilt
         ``state`` (:meth:`energy_state`); None when the law dissipates none."""
         return None
+
+
+def parameter_docs(cls) -> dict:
+    """{name: (unit, kind, accepted, doc)} of a law class's parameters (docs/toml.md)."""
+    return {f.name: (f.metadata.get("unit", "1"), f.metadata.get("kind", "option"), f.metadata.get("accepted"),
+                     f.metadata.get("doc", "")) for f in dataclasses.fields(cls)}
 
 
 def law_parameters(law) -> dict:

@@ -16,8 +16,10 @@ class ConstantFriction(Friction):
     normal traction, laws/friction.py): the plane slides where the shear traction would
     exceed it, with the slip rate collinear with the traction."""
 
-    mu_f: float | np.ndarray = parameter()
-    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
+    mu_f: float | np.ndarray = parameter(accepted=">= 0", doc="friction coefficient")
+    sigma_n: float | np.ndarray | None = parameter(
+        unit="stress", default=None, accepted=">= 0",
+        doc="normal stress, compressive positive; absent: the current normal traction max(0, -tau_2)")
     bonded: np.ndarray | None = bonded_mask()
     kind = "constant_friction"
 

@@ -23,12 +23,14 @@ class CoupledCohesive(Law):
     beta |delta_s| / delta_2): G = delta_c (tau_c cos phi + tau_s sin phi / beta) / 2.
     """
 
-    tau_c: float | np.ndarray = parameter(unit="stress")
-    tau_s: float | np.ndarray = parameter(unit="stress")
-    delta_c: float | np.ndarray = parameter(unit="length")
-    beta: float = parameter(kind="scalar", default=1.0)
-    mu_f: float | np.ndarray = parameter(default=0.0)
-    initial_crack: np.ndarray | None = parameter(kind="mask", default=None)
+    tau_c: float | np.ndarray = parameter(unit="stress", accepted=">= 0", doc="normal (tensile) cohesive strength")
+    tau_s: float | np.ndarray = parameter(unit="stress", accepted=">= 0", doc="shear cohesive strength")
+    delta_c: float | np.ndarray = parameter(unit="length", accepted="> 0",
+                                            doc="critical effective opening, where both strengths reach 0")
+    beta: float = parameter(kind="scalar", default=1.0, accepted="> 0",
+                           doc="weight of the shear slip in the effective opening")
+    mu_f: float | np.ndarray = parameter(default=0.0, accepted=">= 0", doc="friction coefficient of pressed faces")
+    initial_crack: np.ndarray | None = parameter(kind="mask", default=None, doc="points broken at t = 0")
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = True
     contact = True

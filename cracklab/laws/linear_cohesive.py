@@ -18,9 +18,10 @@ class LinearCohesive(Law):
     broken at t = 0.
     """
 
-    tau_c: float | np.ndarray = parameter(unit="stress")
-    delta_c: float | np.ndarray = parameter(unit="length")
-    initial_crack: np.ndarray | None = parameter(kind="mask", default=None)
+    tau_c: float | np.ndarray = parameter(unit="stress", accepted="> 0", doc="cohesive (tensile) strength")
+    delta_c: float | np.ndarray = parameter(unit="length", accepted="> 0",
+                                            doc="critical opening, where the strength reaches 0")
+    initial_crack: np.ndarray | None = parameter(kind="mask", default=None, doc="points broken at t = 0")
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = True  # its update reads delta
     kind = "linear_cohesive"

@@ -20,11 +20,15 @@ class PrescribedRupture(Law):
     avoids the pulses of cell-by-cell jumps; t_w = dx/speed is one cell).
     """
 
-    speed: float = parameter(unit="velocity", kind="scalar")
-    origin: tuple = parameter(unit="length", kind="option", default=(0.0, 0.0))
-    residual: float | np.ndarray = parameter(unit="stress", default=0.0)
-    strength_before: float | np.ndarray = parameter(unit="stress", default=np.inf)
-    weakening_time: float = parameter(unit="time", kind="scalar", default=0.0)
+    speed: float = parameter(unit="velocity", kind="scalar", accepted="> 0", doc="rupture speed")
+    origin: tuple = parameter(unit="length", kind="option", default=(0.0, 0.0),
+                              accepted="[x1, x3] (or [x1] in 2D), finite",
+                              doc="nucleation point (in 2D the line x1 = origin[0])")
+    residual: float | np.ndarray = parameter(unit="stress", default=0.0, accepted=">= 0", doc="strength after the drop")
+    strength_before: float | np.ndarray = parameter(unit="stress", default=np.inf, accepted=">= 0 or inf",
+                                                    doc="strength before the rupture arrives")
+    weakening_time: float = parameter(unit="time", kind="scalar", default=0.0, accepted=">= 0",
+                                      doc="duration of the linear drop (0: a jump)")
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "prescribed_rupture"

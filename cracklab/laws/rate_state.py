@@ -333,17 +333,26 @@ class RateState(Friction):
     |tau0| - eta V_ini (both: they must agree). ``sigma_n`` compressive positive; None:
     the current normal traction (laws/friction.py)."""
 
-    a: float | np.ndarray = parameter()
-    b: float | np.ndarray = parameter()
-    L: float | np.ndarray = parameter(unit="length")
-    V0: float | np.ndarray = parameter(unit="velocity")
-    f0: float | np.ndarray = parameter()
-    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
-    V_ini: float | np.ndarray | None = parameter(unit="velocity", default=None)
-    psi_ini: float | np.ndarray | None = parameter(default=None)
-    evolution: str = parameter(kind="option", default="ageing")
-    f_w: float | np.ndarray | None = parameter(default=None)
-    V_w: float | np.ndarray | None = parameter(unit="velocity", default=None)
+    a: float | np.ndarray = parameter(accepted="> 0", doc="direct-effect parameter")
+    b: float | np.ndarray = parameter(accepted="> 0", doc="evolution-effect parameter")
+    L: float | np.ndarray = parameter(unit="length", accepted="> 0", doc="characteristic slip of the state evolution")
+    V0: float | np.ndarray = parameter(unit="velocity", accepted="> 0", doc="reference slip rate")
+    f0: float | np.ndarray = parameter(accepted="finite", doc="steady-state friction coefficient at V0")
+    sigma_n: float | np.ndarray | None = parameter(
+        unit="stress", default=None, accepted=">= 0",
+        doc="normal stress, compressive positive; absent: the current normal traction max(0, -tau_2)")
+    V_ini: float | np.ndarray | None = parameter(
+        unit="velocity", default=None, accepted="> 0; this or psi_ini",
+        doc="initial slip rate: the initial state slides at it under the load at t = 0")
+    psi_ini: float | np.ndarray | None = parameter(
+        default=None, accepted="finite; this or V_ini (both: they must agree)", doc="initial state psi")
+    evolution: str = parameter(kind="option", default="ageing", accepted=" or ".join(f'"{e}"' for e in EVOLUTIONS),
+                               doc="state evolution law")
+    f_w: float | np.ndarray | None = parameter(
+        default=None, accepted='> 0; with V_w and evolution = "slip"',
+        doc="weakened friction coefficient of strong velocity weakening")
+    V_w: float | np.ndarray | None = parameter(
+        unit="velocity", default=None, accepted="> 0; with f_w", doc="weakening slip rate of strong velocity weakening")
     bonded: np.ndarray | None = bonded_mask()
     kind = "rate_state"
     state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1")}

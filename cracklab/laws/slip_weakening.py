@@ -19,10 +19,13 @@ class SlipWeakening(Friction):
     In 3D the slip rate is collinear with the shear traction.
     """
 
-    mu_s: float | np.ndarray = parameter()
-    mu_d: float | np.ndarray = parameter()
-    D_c: float | np.ndarray = parameter(unit="length")
-    sigma_n: float | np.ndarray | None = parameter(unit="stress", default=None)
+    mu_s: float | np.ndarray = parameter(accepted=">= 0", doc="static friction coefficient")
+    mu_d: float | np.ndarray = parameter(accepted=">= 0; <= mu_s at every node",
+                                          doc="dynamic friction coefficient")
+    D_c: float | np.ndarray = parameter(unit="length", accepted="> 0", doc="slip over which mu_s falls to mu_d")
+    sigma_n: float | np.ndarray | None = parameter(
+        unit="stress", default=None, accepted=">= 0",
+        doc="normal stress, compressive positive; absent: the current normal traction max(0, -tau_2)")
     bonded: np.ndarray | None = bonded_mask()
     kind = "slip_weakening"
     state_variables = {"slip": ("slip path", "length")}

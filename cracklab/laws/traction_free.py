@@ -13,7 +13,8 @@ from .base import ALL, Law, bonded_mask, parameter
 class TractionFree(Law):
     """Traction-free plane, Lamb's problem; ``contact`` forbids interpenetration."""
 
-    contact: bool = parameter(kind="option", default=False)
+    contact: bool = parameter(kind="option", default=False, accepted="true or false",
+                              doc="forbid interpenetration (the opening stays >= 0)")
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "traction_free"

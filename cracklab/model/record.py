@@ -136,6 +136,9 @@ class Record:
         out = {}
         surface = getattr(grid, "free_surface", False)
         for name, xy in (self.stations or {}).items():
+            if len(xy) == 1 and not grid.plane:
+                raise InputError(f"record.stations.{name}", f"{xy!r} gives x1 only: on a 3D grid (n3 = {grid.n3}) "
+                                                            f"a station needs both coordinates, (x1, x3)")
             x1, x3 = (xy + (0.0,))[:2]
             if surface and x3 < 0:
                 raise InputError(f"record.stations.{name}", f"({x1}, {x3}) lies above the free surface: with "

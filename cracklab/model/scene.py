@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -316,10 +317,15 @@ class Scene:
 
         return scene_to_dataset(self)
 
-    def to_toml(self) -> str:
-        from .scene_io import scene_to_toml
+    def to_toml(self, path=None) -> str | Path:
+        """The scene as TOML: the text, or with ``path`` the file, its fields in one netCDF
+        sidecar next to it. Without ``path``: the TOML text, every field inline as nested
+        lists. With ``path``: the scalars written to that TOML file and every field into
+        ``<stem>.fields.nc`` beside it, referenced from the TOML; returns the path. Both
+        round trips through ``Scene.from_toml`` are lossless (docs/scenes.md, docs/toml.md)."""
+        from .scene_io import scene_to_toml, write_scene_toml
 
-        return scene_to_toml(self)
+        return scene_to_toml(self) if path is None else write_scene_toml(self, path)
 
     @staticmethod
     def from_dataset(ds) -> "Scene":
@@ -328,7 +334,11 @@ class Scene:
         return scene_from_dataset(ds)
 
     @staticmethod
-    def from_toml(text: str) -> "Scene":
+    def from_toml(source, *, base=None) -> "Scene":
+        """The scene of a TOML text, a file's bytes, or a TOML file. A file is a
+        ``pathlib.Path`` or a one-line string ending in ".toml". A field's file reference ``{ file = "x.nc",
+        var = "tau_c" }`` is read relative to the file's directory (for text: ``base``,
+        default the current directory) and checked against the grid (docs/toml.md)."""
         from .scene_io import scene_from_toml
 
-        return scene_from_toml(text)
+        return scene_from_toml(source, base=base)

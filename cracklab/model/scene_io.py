@@ -8,7 +8,10 @@ Three representations, one strict decoder (``scene_from_data``):
   attr ``scene`` plus ``input_<section>_<key>`` variables (``cracklab.scene_of``).
 * **TOML** (``scene_to_toml`` / ``scene_from_toml``): the same nested dict with
   the fields inline as nested lists; floats are written repr-exact, ``inf`` as TOML
-  ``inf``.
+  ``inf``. A field may instead be a **file reference** ``{ file = "x.nc", var = "tau_c" }``
+  (netCDF, Zarr, or ``.npy`` without ``var``), resolved relative to the scene file's
+  directory and checked against the grid (``read_field_file``); ``write_scene_toml``
+  writes the scalars to a TOML file and every field into one netCDF sidecar next to it.
 * **xarray** (``scene_to_dataset`` / ``scene_from_dataset``): every scalar parameter
   is one global attr named ``<section>.<key>`` (``material.mu``, ``law.kind``,
   ``record.stations.<name>``, ``units.length``; the top-level ones are ``t_end``,
@@ -27,12 +30,17 @@ import dataclasses
 import json
 import math
 import numbers
+import os
+import uuid
+from pathlib import Path
 
 import numpy as np
 
 from ..errors import MAX_NESTING, InputError, check_nesting
 from .grid import Grid
 from ..laws import LAWS, law_parameters
+from .field_files import (describe as describe_reference, is_file_reference, read_field_file, sidecar_path,
+                          write_sidecar)
 from .units import input_unit
 from .loading import Loading
 from .material import Material
@@ -59,8 +67,8 @@ _EXPECT = {
     "string": "a string",
     "numbers": "a list of numbers",
     "strings": "a list of strings",
-    "field": "a number or an (n1, n3) array of numbers",
-    "mask": "a boolean or an (n1, n3) array of booleans (true/false)",
+    "field": "a number or an (n1, n3) array of numbers, or a file reference {file = ..., var = ...}",
+    "mask": "a boolean or an (n1, n3) array of booleans (true/false), or a file reference {file = ..., var = ...}",
 }
 
 
@@ -171,9 +179,9 @@ def scene_to_json(scene) -> tuple[str, dict]:
     return json.dumps(data, allow_nan=False), arrays
 
 
-def scene_to_toml(scene) -> str:
-    """The scene as TOML text: sections as tables, fields as nested lists, floats
-    repr-exact (TOML reads them back bit for bit), inf as TOML ``inf``."""
+def _toml_text(scene, field) -> str:
+    """The scene as TOML text, each array-valued parameter written as ``field(section, key,
+    value)`` gives it."""
     import tomli_w
 
     data = {"name": scene.name, "t_end": _plain(scene.t_end), "beta": _plain(scene.beta),
@@ -183,12 +191,67 @@ def scene_to_toml(scene) -> str:
     for section, key, value in _items(scene):
         if value is None:
             continue
-        data[section][key] = np.asarray(value).tolist() if _is_array(value) else _plain(value)
+        data[section][key] = field(section, key, value) if _is_array(value) else _plain(value)
     two = _two_materials(scene, _plain)
     if two is not None:
         del data["material"]
         data["materials"] = two
     return tomli_w.dumps(data)
+
+
+def scene_to_toml(scene) -> str:
+    """The scene as TOML text: sections as tables, fields as nested lists, floats
+    repr-exact (TOML reads them back bit for bit), inf as TOML ``inf``."""
+    return _toml_text(scene, lambda section, key, value: np.asarray(value).tolist())
+
+
+def _toml_string(text: str) -> str:
+    """``text`` as a TOML basic string (quoted and escaped)."""
+    import tomli_w
+
+    return tomli_w.dumps({"x": text})[len("x = "):-1]
+
+
+def _replace_file(path: Path, write) -> None:
+    """Call ``write(tmp)`` and move ``tmp`` onto ``path`` (readers never see half a file)."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_scene_toml(scene, path) -> Path:
+    """Write the scene to the TOML file ``path``: its scalars in the TOML, and every
+    array-valued parameter (law fields and masks, the loads) into one netCDF sidecar next
+    to it, ``<stem>.fields.nc`` (``field_files.sidecar_path``), each referenced from the TOML
+    as ``{ file = "<stem>.fields.nc", var = "<section>_<key>" }``. A scene without arrays
+    writes the TOML alone. Both files are replaced whole. Returns ``path``; ``Scene.from_toml
+    (path)`` reads the scene back bit for bit (dtypes included)."""
+    path = Path(path)
+    sidecar = sidecar_path(path)
+    token = uuid.uuid4().hex
+    fields, refs = {}, {}
+
+    def field(section, key, value):
+        name = f"{section}_{key}"
+        fields[name] = (section, key, value)
+        placeholder = f"{token}:{name}"
+        refs[_toml_string(placeholder)] = (f"{{ file = {_toml_string(sidecar.name)}, "
+                                           f"var = {_toml_string(name)} }}")
+        return placeholder
+
+    text = _toml_text(scene, field)
+    for placeholder, ref in refs.items():
+        text = text.replace(placeholder, ref)
+    head = f"# cracklab scene {scene.name!r} (keys: docs/toml.md)"
+    if fields:
+        head += f"\n# its fields are in the netCDF file {sidecar.name} next to this one: {', '.join(fields)}"
+        write_sidecar(scene, sidecar, fields, path.name)
+    _replace_file(path, lambda tmp: tmp.write_text(f"{head}\n{text}", encoding="utf-8"))
+    return path
 
 
 def read_scene_json(text, where: str = "scene") -> dict:
@@ -247,10 +310,35 @@ def read_toml(source, where: str = "toml") -> dict:
     return data
 
 
-def scene_from_toml(text):
-    """Inverse of ``scene_to_toml``; the same format as ``cracklab run SCENE.toml``
-    (``text``: the TOML text, or the bytes of a file)."""
-    return scene_from_data(read_toml(text, "toml"))
+def looks_like_path(source) -> bool:
+    """True for what ``scene_from_toml`` reads as a file name rather than TOML text: a
+    path object, or one line ending in ".toml" that is no TOML statement."""
+    if isinstance(source, os.PathLike):
+        return True
+    if not isinstance(source, str):
+        return False
+    text = source.strip()
+    return ("\n" not in text and text.lower().endswith(".toml") and "=" not in text
+            and not text.startswith(("[", "#")))
+
+
+def scene_from_toml_file(path, where: str | None = None):
+    """The scene of the TOML file at ``path``, its file references resolved relative to
+    the file's directory; a file that cannot be read is one InputError naming ``where``
+    (default: the path)."""
+    path = Path(path)
+    return scene_from_data(read_toml_file(path, where), base=path.absolute().parent)
+
+
+def scene_from_toml(source, base=None):
+    """Inverse of ``scene_to_toml`` and ``write_scene_toml``; the same format as ``cracklab
+    run SCENE.toml``. ``source``: the TOML text, the bytes of a file, or the path of a file
+    (a ``pathlib.Path``, or a one-line string ending in ".toml"). File references are
+    resolved relative to the file's directory, or for text to ``base`` (default: the
+    current directory)."""
+    if looks_like_path(source):
+        return scene_from_toml_file(Path(str(source).strip()) if isinstance(source, str) else source)
+    return scene_from_data(read_toml(source, "toml"), base=base)
 
 
 def _field_attrs(scene, section, key):
@@ -312,9 +400,36 @@ def _is_number(v) -> bool:
     return isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
 
 
-def _coerce(path, kind, value, arrays):
+#: ``scene_from_data(base=NO_FILES)``: file references are refused (the plain data of a run's
+#: output holds its fields itself, so that it alone reruns the run)
+NO_FILES = "no files"
+
+
+class _Files:
+    """Where a scene's file references are read: the directory relative paths start from
+    (None: the current one; NO_FILES: none are read) and the grid the fields must fit."""
+
+    def __init__(self, base, grid):
+        self.base, self.grid = base, grid
+
+    def read(self, path, ref, kind):
+        if self.base is NO_FILES:
+            raise InputError(path, f"got the file reference {describe_reference(ref)}: files are read only for a "
+                                   f"TOML scene (cracklab run, Scene.from_toml); here the field must be given as "
+                                   f"an array")
+        return read_field_file(path, ref, self.grid, kind, self.base)
+
+
+def _coerce(path, kind, value, arrays, files=None):
     """Check the type of one value and bring it into the form the dataclass takes."""
-    if isinstance(value, dict) and set(value) == {"array"}:
+    if is_file_reference(value):
+        if kind in ("field", "mask") and files is not None:
+            value = files.read(path, value, kind)
+        else:
+            raise InputError(path, f"must be {_EXPECT.get(kind, kind)}, got the file reference "
+                                   f"{describe_reference(value)}: only fields (law parameters of kind field or "
+                                   f"mask, loading.tau0_*) are read from files")
+    elif isinstance(value, dict) and set(value) == {"array"}:
         name = value["array"]
         if name not in arrays:
             raise InputError(path, f"refers to the array {name!r}, which is not given")
@@ -390,7 +505,7 @@ def _coerce(path, kind, value, arrays):
     return value
 
 
-def _build(section, cls, d, arrays, schema=None):
+def _build(section, cls, d, arrays, schema=None, files=None):
     if d is None:
         d = {}
     if not isinstance(d, dict):
@@ -406,7 +521,7 @@ def _build(section, cls, d, arrays, schema=None):
                 raise InputError(f"{section}.{key}", f"must be {_EXPECT.get(kind, kind)}, got None")
             kwargs[key] = None
             continue
-        kwargs[key] = _coerce(f"{section}.{key}", kind, value, arrays)
+        kwargs[key] = _coerce(f"{section}.{key}", kind, value, arrays, files)
     missing = [f.name for f in dataclasses.fields(cls)
                if f.name not in kwargs and f.default is dataclasses.MISSING
                and f.default_factory is dataclasses.MISSING]
@@ -418,9 +533,12 @@ def _build(section, cls, d, arrays, schema=None):
         raise InputError(section, str(exc)) from None
 
 
-def scene_from_data(data: dict, arrays: dict | None = None):
+def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
     """A Scene from the nested dict of ``scene_to_data`` / TOML; strict: unknown keys,
-    wrong types and out-of-range values raise one InputError naming the field."""
+    wrong types and out-of-range values raise one InputError naming the field. File
+    references ``{file = ..., var = ...}`` of fields are read relative to ``base`` (a
+    directory; None: the current one) and checked against the grid; by default
+    (``NO_FILES``) they are refused."""
     from .scene import Scene
 
     arrays = arrays or {}
@@ -446,9 +564,10 @@ def scene_from_data(data: dict, arrays: dict | None = None):
     parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("grid",) + (("material",) * ("material" in data))}
     if "materials" in data:
         parts["materials"] = _materials(data["materials"], arrays)
-    parts["law"] = _build("law", LAWS[kind], law_data, arrays)
+    files = _Files(base, parts["grid"])
+    parts["law"] = _build("law", LAWS[kind], law_data, arrays, files=files)
     for s in ("loading", "record", "numerics"):
-        parts[s] = _build(s, classes[s], data.get(s), arrays)
+        parts[s] = _build(s, classes[s], data.get(s), arrays, files=files if s == "loading" else None)
     top = {"t_end": _coerce("t_end", "number", data["t_end"], arrays)}
     if "beta" in data:
         top["beta"] = _coerce("beta", "number", data["beta"], arrays)

@@ -22,6 +22,7 @@ import shutil
 import time
 import warnings
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -293,3 +294,100 @@ def store_error(path, exc: OSError, doing: str) -> StoreError:
            "(read-only location?)", errno.EROFS: "read-only file system"}.get(code) or \
         (os.strerror(code) if code else str(exc))
     return StoreError(path, f"{why} while {doing}")
+
+
+# ----------------------------------------------------------------------------- what a store holds
+def read_entry(path, key):
+    """One top-level entry of the checkpoint of store ``path`` (e.g. "rupture", "n"),
+    reading only the arrays it holds; None without a (readable) checkpoint."""
+    f = Path(path) / GROUP / FILE
+    if not f.exists():
+        return None
+    try:
+        with np.load(f, allow_pickle=False) as z:
+            meta = json.loads(z["__meta__"].tobytes().decode())
+            items = meta["state"]["dict"]
+            for _, k, v in items:
+                if k == key:
+                    return _decode(v, z)
+    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError):
+        return None
+    return None
+
+
+def _frame_written(arr, k) -> bool:
+    frame = np.asarray(arr[k])
+    return not bool(np.isnan(frame).all()) if frame.dtype.kind == "f" else True
+
+
+def written_snapshots(group, fields, start=0, flush=8) -> int:
+    """How many snapshots, from the first, the arrays ``fields`` of the Zarr group ``group``
+    hold (an unfinished run's store is created at full size, NaN until written): a
+    bisection over the frames, then the last ``flush`` frames below the boundary each
+    checked (one flush's chunks may land in any order). Reads one chunk at a time."""
+    best = None
+    for name in fields:
+        arr = group[name]
+        n = int(arr.shape[0])
+        lo, hi = min(start, n), n           # frames < lo are written; the boundary is in [lo, hi]
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if _frame_written(arr, mid):
+                lo = mid + 1
+            else:
+                hi = mid
+        for k in range(max(start, lo - flush), lo):
+            if not _frame_written(arr, k):
+                lo = k
+                break
+        best = lo if best is None else min(best, lo)
+    return 0 if best is None else best
+
+
+@dataclass(frozen=True)
+class RunProgress:
+    """What a run's store holds: ``status`` "complete", "running" (unfinished: killed or
+    still running) or "failed"; ``snapshots`` complete ones of ``total``; the checkpoint's
+    ``step`` (None without one); the run's ``error`` (failed runs)."""
+
+    status: str
+    snapshots: int
+    total: int
+    step: int | None = None
+    error: str | None = None
+
+    @property
+    def finished(self) -> bool:
+        return self.status == "complete"
+
+    def describe(self) -> str:
+        """"unfinished (status running): 8 of 33 snapshots written, checkpoint after step 120"."""
+        if self.status == "complete":
+            return f"complete: {self.total} snapshots"
+        if self.status == "failed":
+            return (f"failed ({self.error or 'no error recorded'}): {self.snapshots} snapshot"
+                    f"{'s' if self.snapshots != 1 else ''} recorded")
+        ck = f", checkpoint after step {self.step}" if self.step is not None else ", no checkpoint"
+        return f"unfinished (status {self.status}): {self.snapshots} of {self.total} snapshots written{ck}"
+
+
+def run_progress(path) -> RunProgress:
+    """The ``RunProgress`` of the run store (or ensemble member group) at ``path``, read
+    lazily: the attrs, then for an unfinished run one chunk at a time (``written_snapshots``)."""
+    import zarr
+
+    g = zarr.open_group(str(path), mode="r")
+    attrs = dict(g.attrs)
+    status = attrs.get("cracklab_status", "complete" if "scene" in attrs else "running")
+    if attrs.get("status") == "failed" and status != "complete":
+        status = "failed"
+    fields = [name for name, arr, dims in _t_arrays(g) if dims and dims[0] == "t" and name != "t"]
+    total = int(g["t"].shape[0]) if "t" in g.array_keys() else 0
+    error = attrs.get("cracklab_error") or attrs.get("error")
+    if status == "running" and fields:
+        start = int(attrs.get("cracklab_checkpoint_snapshots") or 0)
+        n = written_snapshots(g, fields, start=start)
+    else:
+        n = total
+    step = attrs.get("cracklab_checkpoint_step")
+    return RunProgress(status, n, total, None if step is None else int(step), error)

@@ -123,22 +123,71 @@ def _read_error(store, exc) -> StoreError:
                              f"files")
 
 
-def export_netcdf(store, out, *, member=None):
+def _same_content(out: Path, ds) -> bool:
+    """True when the netCDF file ``out`` is an export of the same scene (or ensemble study)
+    as ``ds``: replacing it loses nothing."""
+    try:
+        import netCDF4
+
+        with netCDF4.Dataset(out, "r") as nc:
+            attrs = {k: nc.getncattr(k) for k in nc.ncattrs()}
+    except Exception:  # noqa: BLE001 - not a netCDF file (or unreadable)
+        return False
+    for key in ("scene", "study"):
+        if key in ds.attrs:
+            return attrs.get(key) == _nc_attr(ds.attrs[key]) and attrs.get("member_id") == ds.attrs.get("member_id")
+    return False
+
+
+def _trimmed(ds, path, allow_partial, what):
+    """``ds`` (a run or a member) cut to its complete snapshots, with its RunProgress;
+    a failed run raises InputError unless ``allow_partial``."""
+    from .checkpoint import run_progress
+
+    progress = run_progress(path)
+    if not ds.data_vars:
+        why = f": it failed ({progress.error or 'no error recorded'}) before it recorded anything" \
+            if progress.status == "failed" else f" ({progress.describe()})"
+        raise InputError("member" if "member" in what else "store", f"{what} holds no data{why}")
+    if progress.status == "failed" and not allow_partial:
+        raise InputError("member" if "member" in what else "store",
+                         f"{what} failed ({progress.error or 'no error recorded'}); it holds a partial run: "
+                         f"pass --allow-partial (allow_partial=True) to export what it recorded")
+    if progress.status != "complete" and "t" in ds.dims and progress.snapshots < ds.sizes["t"]:
+        ds = ds.isel(t=slice(0, progress.snapshots))
+    return ds, progress
+
+
+def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=True):
     """Write a run's store, one member of an ensemble (``member`` id), or the whole
-    ensemble (``open_ensemble``) to the netCDF4 file ``out``, compressed (zlib with
-    chunking, ``encoding``) and CF-clean (``netcdf_ready``); returns its path."""
+    ensemble (``open_ensemble``: its complete members) to the netCDF4 file ``out``,
+    compressed (zlib with chunking, ``encoding``) and CF-clean (``netcdf_ready``); returns
+    its path. Read lazily and written chunk by chunk (bounded memory), into a temporary
+    file moved into place at the end (a failure leaves no file). An unfinished run or
+    member is exported up to its last complete snapshot (attr ``cracklab_status``); a
+    failed one is refused unless ``allow_partial``. ``overwrite=False``: refuse to replace
+    an existing ``out`` unless it is an export of the same scene."""
+    import os
+
     import xarray as xr
 
     from ..ensemble.read import member_status, open_ensemble, open_member
-    from ..ensemble.store import store_kind, store_str
+    from ..ensemble.store import member_path, store_kind, store_str
 
     store = store_str(store)
     if store_kind(store) == "ensemble":
-        if member and member not in {st["id"] for st in member_status(store)}:
+        ids = {st["id"]: st for st in member_status(store)}
+        if member and member not in ids:
             raise InputError("member", f"{member!r} is not a member of {store}")
-        ds = open_member(store, member) if member else open_ensemble(store)
         if member:
+            ds = open_member(store, member)
+            ds, _ = _trimmed(ds, member_path(store, member), allow_partial, f"member {member}")
             ds.attrs["member_id"] = member
+        else:
+            keep = None
+            if allow_partial:
+                keep = [i for i, st in ids.items() if st["complete"] or st["status"] == "failed"]
+            ds = open_ensemble(store) if keep is None else open_ensemble(store, members=keep, complete_only=False)
     else:
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
@@ -152,12 +201,27 @@ def export_netcdf(store, out, *, member=None):
             ds = xr.open_zarr(store, consolidated=False)
         except (ValueError, KeyError, OSError) as exc:
             raise _read_error(store, exc) from None
-    try:
-        ds = ds.load()
-    except (ValueError, RuntimeError, OSError) as exc:    # checksum, decompression, decoding errors
-        raise _read_error(store, exc) from None
+        if "://" not in store:
+            ds, _ = _trimmed(ds, store, allow_partial, f"the run in {store}")
     ds = netcdf_ready(ds)
     out = Path(out)
+    if out.exists() and not overwrite and not _same_content(out, ds):
+        raise InputError("output", f"{out} exists and is not an export of this scene; refusing to replace it: "
+                                   f"choose another file, or --overwrite")
     out.parent.mkdir(parents=True, exist_ok=True)
-    ds.to_netcdf(out, engine="netcdf4", format="NETCDF4", encoding=encoding(ds))
+    tmp = out.with_name(f".{out.name}.{os.getpid()}.tmp")
+    try:
+        ds.to_netcdf(tmp, engine="netcdf4", format="NETCDF4", encoding=encoding(ds))
+        os.replace(tmp, out)
+    except (ValueError, RuntimeError) as exc:    # checksum, decompression, decoding errors
+        raise _read_error(store, exc) from None
+    except OSError as exc:
+        import errno
+
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EACCES, errno.EPERM, errno.EROFS):
+            raise                                # writing: the caller names the output
+        raise _read_error(store, exc) from None
+    finally:
+        if tmp.exists():
+            tmp.unlink()
     return out

@@ -1,6 +1,7 @@
 """Run a scene and return (or stream to Zarr) a labelled xarray Dataset."""
 from __future__ import annotations
 
+import contextlib
 import warnings
 
 import numpy as np
@@ -8,7 +9,7 @@ import xarray as xr
 
 from .. import __version__
 from . import checkpoint
-from ..errors import InputError, SimulationError, StoreError, StoreWarning
+from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
 from ..model.record import face_field
 from ..model.scene_io import scene_from_data, scene_to_json
 from ..model.units import input_unit, unit
@@ -332,7 +333,33 @@ def _damaged(path, report, doing):
     warnings.warn(StoreWarning(f"store {path} is damaged: {report.first()}; {doing}"), stacklevel=3)
 
 
-def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False):
+@contextlib.contextmanager
+def _deferred_interrupt(enabled):
+    """While a run into a store steps in the main thread, Ctrl-C (SIGINT) only sets a flag
+    that the loop reads between two steps (a second Ctrl-C interrupts at once); yields the
+    flag, a dict {"hit": bool}."""
+    import signal
+    import threading
+
+    flag = {"hit": False}
+    if not enabled or threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield flag
+        return
+
+    def handler(signum, frame):
+        if flag["hit"]:
+            raise KeyboardInterrupt
+        flag["hit"] = True
+
+    old = signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
+def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False, check_memory=True):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
     ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
     snapshots stream to that Zarr store during the run and the result is read back lazily.
@@ -346,14 +373,23 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     (``cracklab.output.verify``). A damaged store is not served: a complete one, or one damaged
     before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
     the damaged files). Store problems raise StoreError.
-    """
-    import time
 
+    ``check_memory``: estimate the run's memory first (``cracklab.solver.budget``) and raise
+    ``MemoryBudgetError`` before any step when it exceeds the memory available. Ctrl-C
+    during a run into a local store stops it after the step in progress, writes a
+    checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
+    """
     every_n, every_s = _checkpoint_policy(checkpoint_every)
     adaptive = checkpoint_every is None     # the default: keep checkpoints under 10 % of the time
     path = checkpoint.local_path(store) if store is not None else None
     if resume and path is None:
         raise InputError("resume", "needs a store path (a local Zarr directory) to resume from")
+    if check_memory:
+        from ..solver.budget import check_memory as fits, run_memory
+
+        fits(run_memory(scene, store=store is not None), what=f"the run of {scene.name!r}",
+             hint="make the grid coarser or the run shorter, or run it anyway with check_memory=False "
+                  "(cracklab run --no-memory-check)")
     rec = Recorder(scene, store, path)
     start, last = None, -1
     if path is not None:
@@ -387,6 +423,14 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
         kind, attrs = checkpoint.inspect(path)
         if kind == "empty" and not rec.written:
             rec.kept_attrs = attrs
+    with _deferred_interrupt(path is not None) as interrupt:
+        return _run(scene, rec, store, path, start, last, progress, every_n, every_s, adaptive, interrupt)
+
+
+def _run(scene, rec, store, path, start, last, progress, every_n, every_s, adaptive, interrupt):
+    """The loop of ``simulate``: create the store, step, record, checkpoint."""
+    import time
+
     if store is not None and not rec.written:
         rec.create()
     try:
@@ -406,6 +450,9 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
         for state in iterator:
             rec(state)
             last = state.n
+            if interrupt["hit"] and last < scene.nsteps:
+                rec.checkpoint(stepper, last)
+                raise Interrupted(last, path)
             if do_ckpt and last < scene.nsteps:
                 if every_n:
                     due = last > max(n_ckpt, 0) and last % every_n == 0

@@ -133,6 +133,19 @@ def _is_plane(ds) -> bool:
     return ds.sizes.get("x3", 0) == 1
 
 
+#: nodes per axis drawn at most: a larger grid is drawn every k-th node, so that a figure
+#: reads one thinned frame at a time whatever the store's size (bounded memory)
+MAX_NODES = 1024
+#: nodes per axis and frames of an animation at most
+GIF_NODES, GIF_FRAMES = 400, 200
+
+
+def _thin(ds, nodes=MAX_NODES):
+    """``ds`` (lazily) every k-th node along x1 and x3, k such that at most ``nodes`` remain."""
+    steps = {d: int(math.ceil(ds.sizes[d] / nodes)) for d in ("x1", "x3") if ds.sizes.get(d, 0) > nodes}
+    return ds.isel({d: slice(None, None, k) for d, k in steps.items()}) if steps else ds
+
+
 def _plane_image(ax, ds, values, *, cmap, vmin=None, vmax=None, norm=None):
     """pcolormesh of an (x1, x3) array with x1 across, x3 up, equal aspect (3D grids)."""
     x1, x3 = _extent(ds)
@@ -175,7 +188,7 @@ def _limits(values, field, robust, lo=2.0, hi=98.0):
 def snapshot(ds, field="delta_2", *, t=None, member=None, ax=None, path=None, cmap=None, robust=True):
     """``field`` over the plane at the snapshot nearest ``t`` (default: the last); in the
     plane problem (n3 = 1) a line along x1."""
-    d = _member(ds, member)
+    d = _thin(_member(ds, member))
     if field not in d:
         raise ValueError(f"no field {field!r} in this result; recorded: "
                          f"{', '.join(v for v in d.data_vars if 't' in d[v].dims) or 'none'}")
@@ -223,7 +236,7 @@ def rupture_contours(ds, *, member=None, levels=10, ax=None, path=None, backgrou
     from matplotlib.colors import ListedColormap
 
     plt = _plt()
-    d = _member(ds, member)
+    d = _thin(_member(ds, member))
     rt = d["rupture_time"].transpose("x1", "x3")
     values = rt.values
     fig, ax = _axes(ax)
@@ -492,30 +505,38 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
 
     The figure (axes, colour bar, labels) is drawn once; each frame redraws only the
     field and the time in the title (blitting) and goes to Pillow, as matplotlib's
-    PillowWriter does, so that a GIF of a few dozen frames takes about a second."""
+    PillowWriter does, so that a GIF of a few dozen frames takes about a second. Frames
+    are read one at a time, at most ``GIF_FRAMES`` of them on at most ``GIF_NODES`` nodes
+    per axis (bounded memory on any store)."""
     plt = _plt()
     from PIL import Image
 
-    d = _member(ds, member)
+    d = _thin(_member(ds, member), GIF_NODES)
     if field not in d or "t" not in d[field].dims or d.sizes["t"] == 0:
         raise ValueError(f"no snapshots of {field!r} to animate")
+    if d.sizes["t"] > GIF_FRAMES:       # every k-th snapshot, the last one kept
+        keep = np.unique(np.linspace(0, d.sizes["t"] - 1, GIF_FRAMES).round().astype(int))
+        d = d.isel(t=keep)
     da = d[field].transpose("t", "x1", "x3")
-    frames = np.asarray(da.values)
+    # the colour (or y) range from a few frames, then one frame read at a time
+    sample = np.asarray(da.isel(t=np.unique(np.linspace(0, da.sizes["t"] - 1, 12).round().astype(int))).values)
     if robust:
-        vmin, vmax = _limits(frames, field, True, 1.0, 99.5)
+        vmin, vmax = _limits(sample, field, True, 1.0, 99.5)
     else:
-        vmin, vmax = _robust(frames, 0.0, 100.0)
+        vmin, vmax = _robust(sample, 0.0, 100.0)
+    del sample
     plane = _is_plane(d)
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=dpi, layout="constrained")
+    first = np.asarray(da.isel(t=0).values)
     if plane:               # the plane problem: the field is a line along x1
-        (artist,) = ax.plot(d["x1"].values, frames[0][:, 0], color="C0", lw=1.5)
+        (artist,) = ax.plot(d["x1"].values, first[:, 0], color="C0", lw=1.5)
         pad = 0.05 * (vmax - vmin)
         ax.set_ylim(vmin - pad, vmax + pad)
         ax.set_xlabel(_label(d, "x1"))
         ax.set_ylabel(_label(d, field))
         ax.grid(alpha=0.3)
     else:
-        artist = _plane_image(ax, d, frames[0], cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
+        artist = _plane_image(ax, d, first, cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
         fig.colorbar(artist, ax=ax, label=_label(d, field), shrink=0.9)
     t = da["t"].values
     name = da.attrs.get("long_name", field)
@@ -529,10 +550,11 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
     artist.set_visible(True)
     images = []
     for k in range(len(t)):
+        frame = np.asarray(da.isel(t=k).values)
         if plane:
-            artist.set_ydata(frames[k][:, 0])
+            artist.set_ydata(frame[:, 0])
         else:
-            artist.set_array(np.asarray(frames[k]).T.ravel())
+            artist.set_array(frame.T.ravel())
         title.set_text(f"{name}, t = {t[k]:.3g}")
         fig.canvas.restore_region(background)
         ax.draw_artist(artist)

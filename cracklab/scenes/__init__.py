@@ -1,5 +1,7 @@
-"""Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3,
-SCEC TPV6 (a bimaterial fault under a free surface), SCEC TPV101 and TPV103 (rate-and-state friction), the plane test problems used in
+"""Scene builders: Lamb's problem, the suddenly loaded elliptical crack, SCEC TPV3 and
+TPV5 (a free surface by mirror symmetry), SCEC TPV6 (a bimaterial fault under a free
+surface), SCEC TPV101-TPV104 (rate-and-state friction; TPV102 and TPV104 below a free
+surface), the plane test problems used in
 verification, and the crack-growth problems of section 4 (a row of tough asperities,
 random toughness; see docs/scenes.md)."""
 from __future__ import annotations
@@ -21,8 +23,8 @@ UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
 # these functions of this module, by name. No other name of the module (a helper, or
 # ``np`` imported above) is reachable from a study; further builders are registered
 # explicitly (cracklab.register_builder, or the entry-point group "cracklab.builders").
-BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv101", "tpv103", "asperity_row",
-            "random_toughness", "tpv6")
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv5", "tpv6", "tpv101", "tpv102",
+            "tpv103", "tpv104", "asperity_row", "random_toughness")
 
 
 def lamb(*, n, beta=0.5, t_end, record=None, numerics=None):
@@ -138,6 +140,70 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
 
 
+# ---------------------------------------------------------------------------- SCEC TPV5
+#: (strike offset from the hypocentre, depth below the free surface) in units of 100 m.
+#: The first five are the MDSBI reference's records (shared/reference/tpv5_mdsbi/README.md):
+#: faultst000dp000 on the surface above the hypocentre, faultst000dp030 3 km below it,
+#: faultst000dp075 the hypocentre, faultst-075dp075 and faultst075dp075 the centres of the
+#: 78 MPa and 62 MPa patches. The others sample the rest of the fault (surface, deep edge).
+TPV5_REFERENCE_STATIONS = [(0, 0), (0, 30), (0, 75), (-75, 75), (75, 75)]
+TPV5_STATIONS = TPV5_REFERENCE_STATIONS + [(-75, 0), (75, 0), (-120, 0), (120, 0), (0, 120), (-120, 75),
+                                           (120, 75), (-120, 120), (120, 120)]
+
+#: the three 3 km x 3 km squares of TPV5 at depth 7.5 km: (strike centre in m, initial shear stress in Pa)
+TPV5_PATCHES = ((0.0, 81.6e6), (-7500.0, 78.0e6), (7500.0, 62.0e6))
+
+
+def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
+    """SCEC TPV5 (see shared/reference/tpv5_mdsbi/README.md): TPV3's fault reaching a free
+    surface, with two more stress patches; SI units.
+
+    The free surface is the line x3 = 0 by mirror symmetry (``Grid(free_surface=True)``):
+    the grid is the half plane x3 = depth in [0, L3] below it, ``domain`` = (L1, L3) with
+    L1 the periodic length along strike and L3 the depth of the half plane (the line
+    x3 = L3 is a mirror too, so the fault's image below it lies 2 (L3 - 15 km) from the
+    fault). The fault is 30 km along strike, centred on the node x1 = L1/2 (the hypocentre's
+    strike), from the surface to 15 km depth; the plane outside it is bonded. Initial shear
+    stress 70 MPa along strike except in three 3 km x 3 km squares centred at 7.5 km depth:
+    81.6 MPa at the hypocentre (nucleation: above the static strength 81.24 MPa), 78.0 MPa
+    at strike -7.5 km and 62.0 MPa at +7.5 km. Friction, normal stress and material as
+    :func:`tpv3`. Patches and fault edges are put on the grid by cell area as in ``tpv3``
+    (each node takes the fraction of its dx x dx cell inside the square; a node whose cell
+    leaves the fault is bonded; the surface node's cell is cut by the surface, whose image
+    continues the fault, so the fault's top row slips). Records the stations
+    ``TPV5_STATIONS``, named ``faultst<strike>dp<depth>`` in units of 100 m (faultst000dp000
+    on the surface above the hypocentre), and the rupture time (slip rate above 1 mm/s).
+    beta: at most 0.125, as ``tpv3``. See docs/tpv5.md."""
+    dx = check_positive("dx", dx)
+    try:
+        L1, L3 = (float(x) for x in domain)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
+    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
+    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
+             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+             f"L3 >= 15 km + dx), got {domain!r}")
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
+    xc = grid.x1[n1 // 2]
+    depth = grid.x3
+    rows = _tpv3_cell_fraction(depth - 7500.0, grid.dx3, 1500.0)
+    tau0 = np.full(grid.shape, 70.0e6)
+    for centre, stress in TPV5_PATCHES:
+        tau0 += (stress - 70.0e6) * np.outer(_tpv3_cell_fraction(grid.x1 - xc - centre, grid.dx1, 1500.0), rows)
+    # the fault is |x1 - xc| <= 15 km, |x3| <= 15 km on the doubled cell: depth 0 to 15 km here
+    fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
+                     _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
+    law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
+    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
+    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step")
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
+    return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
+                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv5")
+
+
 # ---------------------------------------------------------------------------- SCEC TPV6
 #: (strike offset from the hypocentre, depth below the free surface) in units of 100 m. The
 #: first five are the MDSBI reference's (shared/reference/tpv6_mdsbi/README.md: its files
@@ -220,15 +286,31 @@ def taper(x, W, w):
 TPV101_STATIONS = [(s, d) for d in (30, 75, 120) for s in ((-120, 0, 120) if d != 75 else (-90, 0, 90))]
 
 
-def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau0, dtau0):
-    """The geometry, load and records TPV101 and TPV103 share (whole space, periodic
-    ``domain`` with the hypocentre at its centre node). ``law`` maps the velocity-weakening
-    box B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) to the law."""
+#: depth of the hypocentre, the centre of the 15 km fault, below its top (and below the free
+#: surface of TPV102 and TPV104)
+TPV_HYPO_DEPTH = 7500.0
+
+
+def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau0, dtau0, free_surface=False):
+    """The geometry, load and records TPV101-104 share. Whole space (TPV101, TPV103): the
+    periodic ``domain`` with the hypocentre at its centre node. Half space (TPV102, TPV104):
+    the half plane of ``domain`` = (L1, depth L3) below the free surface x3 = 0 (mirror
+    symmetry), the hypocentre at the centre along strike and 7.5 km deep, so the fault's
+    top is the surface. ``law`` maps the velocity-weakening box
+    B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) (x, z from the hypocentre) to the law."""
     L1, L3 = domain
+    dx = check_positive("dx", dx)
     n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
+    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=free_surface)
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)       # c_p = sqrt(3) c_s = 6000 m/s
-    xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
+    xc = grid.x1[n1 // 2]
+    if free_surface:
+        if grid.L3 < 2 * TPV_HYPO_DEPTH + 3000.0:
+            raise InputError("domain", f"the depth L3 must reach below the fault and its 3 km transition "
+                                       f"(>= {2 * TPV_HYPO_DEPTH + 3000.0:g} m), got {grid.L3:g}")
+        zc = TPV_HYPO_DEPTH              # x3 is the depth; the hypocentre need not lie on a node
+    else:
+        zc = grid.x3[n3 // 2]
     box = np.outer(taper(grid.x1 - xc, 15000.0, 3000.0), taper(grid.x3 - zc, 7500.0, 3000.0))
     loading = Loading(tau0_1=tau0, nucleation_dtau_1=dtau0, nucleation_radius=3000.0, nucleation_time=1.0,
                       nucleation_x1=float(xc), nucleation_x3=float(zc))
@@ -242,6 +324,17 @@ def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau
                  units={"length": "m", "time": "s", "stress": "Pa"}, name=name)
 
 
+def _tpv101_law(box):
+    return RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
+                     V_ini=1e-12, evolution="ageing")
+
+
+def _tpv103_law(box):
+    outside = 1.0 - box
+    return RateState(a=0.01 + 0.01 * outside, b=0.014, L=0.4, V0=1e-6, f0=0.6, sigma_n=120e6, V_ini=1e-16,
+                     evolution="slip", f_w=0.2, V_w=0.1 + 0.9 * outside)
+
+
 def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
     """SCEC TPV101 (see shared/reference/tpv101_uguca/README.md): rate-and-state friction,
     ageing law, in a whole space. a = 0.008 + 0.008 (1 - B(x; 15 km, 3 km) B(z; 7.5 km, 3 km))
@@ -252,12 +345,21 @@ def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domai
     SI units; records SCEC's on-fault stations (faultst000dp075 the hypocentre; dp the depth
     below the top of the fault, x3 growing with depth) and the rupture time (slip rate above
     1 mm/s). beta: at most 0.25."""
-    def law(box):
-        return RateState(a=0.008 + 0.008 * (1.0 - box), b=0.012, L=0.02, V0=1e-6, f0=0.6, sigma_n=120e6,
-                         V_ini=1e-12, evolution="ageing")
-
     return _tpv_rate_state("tpv101", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
-                           domain=domain, law=law, tau0=75e6, dtau0=25e6)
+                           domain=domain, law=_tpv101_law, tau0=75e6, dtau0=25e6)
+
+
+def tpv102(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV102: :func:`tpv101` (ageing law) below a free surface. The grid is the half
+    plane of ``domain`` = (L1, depth L3) under the surface x3 = 0 (``Grid(free_surface=True)``,
+    mirror symmetry; x3 the depth, n3 + 1 nodes along it); the hypocentre lies at the centre
+    along strike, 7.5 km deep, so the velocity-weakening box reaches from the surface to
+    15 km depth, its transition B(z; 7.5 km, 3 km) below to 18 km. Stations by SCEC's names
+    at depth dp x 100 m (faultst000dp075 the hypocentre; each at its nearest node); the
+    rupture time. L3 at least 18 km (the default 36 km: the fault's image in the mirror line
+    x3 = L3 lies 36 km below it)."""
+    return _tpv_rate_state("tpv102", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=_tpv101_law, tau0=75e6, dtau0=25e6, free_surface=True)
 
 
 def tpv103(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
@@ -265,13 +367,15 @@ def tpv103(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domai
     whole space; the geometry, stations and records of :func:`tpv101`. a = 0.01 + 0.01 (1 - B B),
     b 0.014, L 0.4 m, f_w 0.2, V_w = 0.1 + 0.9 (1 - B B) m/s, V0 1e-6 m/s, f0 0.6, sigma_n
     120 MPa; tau0 40 MPa with V_ini = 1e-16 m/s; nucleation 45 MPa F(r) G(t), R 3 km, T 1 s."""
-    def law(box):
-        outside = 1.0 - box
-        return RateState(a=0.01 + 0.01 * outside, b=0.014, L=0.4, V0=1e-6, f0=0.6, sigma_n=120e6, V_ini=1e-16,
-                         evolution="slip", f_w=0.2, V_w=0.1 + 0.9 * outside)
-
     return _tpv_rate_state("tpv103", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
-                           domain=domain, law=law, tau0=40e6, dtau0=45e6)
+                           domain=domain, law=_tpv103_law, tau0=40e6, dtau0=45e6)
+
+
+def tpv104(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
+    """SCEC TPV104: :func:`tpv103` (slip law, strong velocity weakening) below a free
+    surface, with the half-plane geometry, depth convention and stations of :func:`tpv102`."""
+    return _tpv_rate_state("tpv104", dx=dx, t_end=t_end, beta=beta, record=record, numerics=numerics,
+                           domain=domain, law=_tpv103_law, tau0=40e6, dtau0=45e6, free_surface=True)
 
 
 # ---------------------------------------------------------------------------- section 4: crack growth

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..history import make_engine
-from .loops import product_predict
+from .halfspace import predict_channel
 from .schemes import SCHEMES
 
 #: channel -> (kernel, the velocity it convolves)
@@ -68,15 +68,8 @@ class Face:
             if n == 0:
                 ch.H = None
                 self._F[name] = np.zeros_like(V)
-            elif n == 1:
-                ch.v0 = V.copy()
-                ch.dknown = 0.5 * self.dt * V
-                S = ch.engine.push(V) + ch.engine.start_weight(n) * ch.v0
-                ch.H = ch.static * ch.dknown + ch.pre * S
-                self._F[name] = ch.H + ch.K * V
             else:
-                ch.H, self._F[name] = product_predict(V, ch.engine.push(V), ch.engine.start_weight(n), ch.v0,
-                                                      ch.dknown, ch.static, ch.pre, ch.K, self.dt)
+                self._F[name] = predict_channel(ch, V, n, self.dt)
         for ch in self.channels.values():
             ch.engine.launch()
         return self._combine()

@@ -69,6 +69,21 @@ def split_channels(X: dict, channels, shear3d: bool, c, s, out_arrays=None) -> d
     return out
 
 
+def predict_channel(ch, V, n, dt, out=None):
+    """Product scheme, one channel, step n >= 1: push V = V_{n-1} (``out``: the engine's
+    output array), set the channel's start-up terms (n = 1) and H, return F = H + K V."""
+    if n == 1:
+        ch.v0 = V.copy()
+        ch.dknown = 0.5 * dt * V
+        S = ch.engine.push(V) + ch.engine.start_weight(n) * ch.v0
+        ch.H = ch.static * ch.dknown + ch.pre * S
+        return ch.H + ch.K * V
+    # the same, in one pass: dknown += dt V, H, F
+    ch.H, F = product_predict(V, ch.engine.push(V, out=out), ch.engine.start_weight(n), ch.v0, ch.dknown,
+                              ch.static, ch.pre, ch.K, dt)
+    return F
+
+
 class HalfSpace:
     """Maps the displacement (and velocity) history of its face to f_j, Eq. (3), times ``scale``.
 
@@ -235,16 +250,7 @@ class HalfSpace:
                 ch.H, F[k] = product_predict(Vk, Sk, e0, v0, dk, st, pre, K, self.dt)
             return self._inverse(F)
         for name, ch in self.channels.items():
-            if n == 1:
-                ch.v0 = V[name].copy()
-                ch.dknown = 0.5 * self.dt * V[name]
-                S = ch.engine.push(V[name]) + ch.engine.start_weight(n) * ch.v0
-                ch.H = ch.static * ch.dknown + ch.pre * S
-                F[name] = ch.H + ch.K * V[name]
-            else:  # the same, in one pass: dknown += dt V, H, F
-                ch.H, F[name] = product_predict(V[name], ch.engine.push(V[name], out=self._S[name]),
-                                                ch.engine.start_weight(n), ch.v0, ch.dknown, ch.static, ch.pre,
-                                                ch.K, self.dt)
+            F[name] = predict_channel(ch, V[name], n, self.dt, out=self._S[name])
         self._launch()
         return self._inverse(F)
 

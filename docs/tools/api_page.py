@@ -45,8 +45,6 @@ NO_DOCSTRING = {
     "cracklab.Scene.replace": "A new scene with the given fields changed, validated like any other "
                               "(shared/API.md).",
     "cracklab.Scene.nsteps": "Number of time steps, ceil(t_end / dt).",
-    "cracklab.Scene.to_toml": "The scene as TOML text (a lossless round trip, docs/scenes.md).",
-    "cracklab.Scene.from_toml": "The scene of a TOML text (or a file's bytes).",
     "cracklab.Scene.to_dataset": "The scene as an xarray Dataset (a lossless round trip, docs/scenes.md).",
     "cracklab.Scene.from_dataset": "The scene of a Dataset written by `to_dataset` or by a run.",
 }

@@ -171,3 +171,21 @@ def test_3d_shear_crack_budget_closes():
     assert float(np.max(np.abs(b["closure"]))) < 1.5e-3
     late = b.sel(t=slice(1.0, None))
     assert float(late["radiated_balance"].mean() / late["work_loads"].mean()) == pytest.approx(0.5, abs=0.01)
+
+
+def test_budget_refuses_what_it_does_not_cover():
+    """Two materials and the half plane of a free surface: one clear error each, before any work."""
+    from cracklab import Grid, InputError, Loading, Material, Numerics, Record, Scene, TractionFree
+    from cracklab.analysis.energy import energy_budget
+
+    m = Material(mu=1.0, cs=1.0, nu=0.25)
+    base = dict(law=TractionFree(contact=False), t_end=0.05, record=Record(fields=("delta_1", "tau_1")),
+                numerics=Numerics(formulation="product"))
+    two = Scene(materials=(m, Material(mu=0.5, cs=0.8, nu=0.3)), grid=Grid(n1=8, n3=1, L1=1.0, L3=1.0),
+                loading=Loading(tau0_1=1.0), **base)
+    with pytest.raises(InputError, match="materials"):
+        energy_budget(None, scene=two)
+    half = Scene(material=m, grid=Grid(n1=8, n3=4, L1=1.0, L3=0.5, free_surface=True),
+                 loading=Loading(tau0_1=1.0), **base)
+    with pytest.raises(InputError, match="free_surface"):
+        energy_budget(None, scene=half)

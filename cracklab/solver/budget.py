@@ -1,0 +1,287 @@
+"""The memory and the time a run needs, known before it starts.
+
+``run_memory(scene)`` estimates the bytes of a run from the scene alone (no array of the
+grid's size is made): the history engines' states (the largest part), the work arrays of
+a step (fields, spectra, the law's and the load's fields, FFT buffers) and what the
+recorder keeps in memory (station series, pending snapshots, rupture times; every
+snapshot for a run into memory). ``available_memory()`` is what this machine (and this
+process's limits) can give; ``check_memory`` refuses a run, or a sweep's workers, that
+does not fit, with one ``MemoryBudgetError`` giving both figures. ``calibrate`` times a
+few steps of the run and extrapolates its run time.
+
+The estimate is checked against the peak resident memory of real runs
+(tests/solver/test_budget.py: within a factor 1.5 above the interpreter's own memory).
+"""
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import MemoryBudgetError
+
+#: resident memory of a fresh process running a member (interpreter, numpy, xarray,
+#: zarr, numba, pyfftw and the compiled loops): the baseline of a sweep's worker
+PROCESS_BYTES = 400 << 20
+#: env variable capping the memory cracklab counts as available ("8GB", "512MB", bytes)
+LIMIT_ENV = "CRACKLAB_MEMORY_LIMIT"
+_CHUNK = 256            # the direct engine's growth step (history/direct.py)
+_BLOCK = 8              # the exponential engine's block of direct taps (history/exponential.py)
+_FLUSH = 8              # snapshots the recorder keeps before writing them to the store
+_CACHE = 256 << 20      # the kernel-table cache bound (history/tables.py)
+#: doubles of temporaries per weight while exact weights are computed (measured: the
+#: product rule's integrals take about 205, the other rules about 20), for the direct
+#: engine's tables and the exponential engine's taps (half: its states are not yet resident)
+_WEIGHT_TEMPS = {"product": 210, "other": 22}
+_TAP_TEMPS = {"product": 110, "other": 12}
+
+
+@dataclass(frozen=True)
+class MemoryEstimate:
+    """Estimated bytes of one run, by part: ``history`` (the engines' states), ``work``
+    (work arrays of a step), ``setup`` (the temporaries of the largest engine's set-up,
+    its exact weights and fits, freed before the first step), ``records`` (what the
+    recorder keeps in memory); ``steps``: the run's number of steps."""
+
+    history: int
+    work: int
+    records: int
+    steps: int
+    setup: int = 0
+
+    @property
+    def total(self) -> int:
+        """Bytes of the run's arrays at their peak (the interpreter's own memory not
+        included): the set-up's temporaries are counted on top of the rest, as the
+        states of the engines built before it are already held."""
+        return self.history + self.work + self.setup + self.records
+
+    def describe(self) -> str:
+        """"about 1.2 GB (history 1.0 GB, work arrays 150 MB, set-up 30 MB, records 20 MB)"."""
+        setup = f", set-up {fmt_bytes(self.setup)}" if self.setup else ""
+        return (f"about {fmt_bytes(self.total)} (history {fmt_bytes(self.history)}, work arrays "
+                f"{fmt_bytes(self.work)}{setup}, records {fmt_bytes(self.records)})")
+
+
+def fmt_bytes(n: float) -> str:
+    """Bytes in the largest unit that keeps the number >= 1 (kB, MB, GB, TB; powers of 1024)."""
+    for unit, size in (("TB", 1 << 40), ("GB", 1 << 30), ("MB", 1 << 20), ("kB", 1 << 10)):
+        if abs(n) >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{int(n)} B"
+
+
+def parse_bytes(text) -> int:
+    """Bytes from "8GB", "512 MB", "1.5g" or a plain number of bytes; ValueError otherwise."""
+    m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:e[+-]?[0-9]+)?)\s*([kmgt]?)i?b?\s*", str(text).lower())
+    if not m:
+        raise ValueError(f"not a size: {text!r} (give bytes, or a number with kB, MB, GB or TB)")
+    return int(float(m.group(1)) * 1024 ** " kmgt".index(m.group(2) or " "))
+
+
+def _modes(grid) -> int:
+    s = grid.spectral_shape
+    return int(s[0]) * int(s[1])
+
+
+def _gammas(grid, dt, cs, limit=1 << 20):
+    """(sample of gamma = q c_s dt over the modes, weight of each sampled mode): every mode
+    for grids of up to ``limit`` modes, else a regular subsample of the two axes."""
+    k, m = grid._axes()
+    total = k.size * m.size
+    step = max(1, int(math.ceil(math.sqrt(total / limit))))
+    ks, ms = k[::step], m[::step]
+    q = np.sqrt(ks[:, None] ** 2 + ms[None, :] ** 2).ravel()
+    return q * cs * dt, total / q.size
+
+
+def _exponential_bytes(grid, scene, kernel, scheme) -> tuple[int, int]:
+    """(bytes held, extra bytes while it is built) of one exponential engine (numba backend)."""
+    from ..history.exponential import ENGINE_T0, _SHIFT, direct_taps
+    from ..history.fit import get_fit
+
+    M = _modes(grid)
+    g, weight = _gammas(grid, scene.dt, scene.material.cs)
+    gmax = grid.q_max() * scene.material.cs * scene.dt
+    T_end = None if gmax == 0 else gmax * (scene.nsteps + 2)
+    pairs = get_fit(kernel, scene.material.nu, scheme.convolves, T0=ENGINE_T0, T_end=T_end).pairs
+    jd = direct_taps(g, scheme.lag, ENGINE_T0, extra=_SHIFT.get(scheme.rule, 0), minimum=_BLOCK)
+    long_taps = float(jd[jd > _BLOCK].sum()) * weight          # modes with their own ring
+    distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
+    taps = float(jd.sum()) / jd.size * distinct         # exact weights, per distinct gamma
+    held = (M * pairs * 8 * 8                 # 4 state arrays, 4 recursion tables (re, im)
+            + M * (2 * _BLOCK * 16 + _BLOCK * 8 + 2 * 8)    # last inputs, tail sums, taps, indices
+            + long_taps * 24 + taps * 8 * (2 if scheme.rule == "product" else 1))
+    temps = _TAP_TEMPS["product" if scheme.rule == "product" else "other"]
+    building = max(distinct * pairs * 16 * 4 + M * 8 * 6 + M * pairs * 8, taps * 8 * temps)
+    return int(held), int(building)
+
+
+def _direct_bytes(grid, scene, scheme, window_steps=None) -> tuple[int, int]:
+    """(bytes held, extra bytes while it grows) of one direct engine."""
+    M = _modes(grid)
+    length = scene.nsteps + 1 if window_steps is None else min(scene.nsteps + 1, window_steps)
+    cap = _CHUNK
+    while cap < length:
+        cap *= 2
+    rows = int(math.ceil(length / _CHUNK)) * _CHUNK
+    buf = 2 * length * M * 16          # the doubled ring; its rows past the history stay untouched
+    weights = rows * 2 * M * 8
+    g, weight = _gammas(grid, scene.dt, scene.material.cs)
+    distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
+    table = min(_CACHE, distinct * rows * 8)
+    temps = _WEIGHT_TEMPS["product" if scheme.rule == "product" else "other"]
+    # growing: the old buffer beside the new one, the weights concatenated, the next
+    # chunk of weights computed
+    return int(buf + weights + table), int(max(buf // 4 + weights, _CHUNK * distinct * 8 * temps))
+
+
+def run_memory(scene, *, store=True) -> MemoryEstimate:
+    """The memory a run of ``scene`` needs, estimated from the scene (``store``: the run
+    streams its snapshots to a store and keeps a few in memory; False: it keeps them all)."""
+    from ..history import resolve_engine
+    from .halfspace import active_channels
+    from .schemes import SCHEMES
+
+    grid = scene.grid
+    comps = scene.components
+    scheme = SCHEMES[scene.formulation]
+    engine = resolve_engine(scene.numerics.engine, scene.numerics.window)
+    channels = active_channels(grid.plane, comps)
+    history, building = 0, 0
+    window_steps = None
+    if scene.numerics.window is not None:
+        gmin = 2 * np.pi / max(grid.L1, grid.L3 if not grid.plane else 0.0) * scene.material.cs * scene.dt
+        window_steps = int(math.ceil(scene.numerics.window / gmin)) + 1
+    for kernel in channels:
+        held, extra = (_exponential_bytes(grid, scene, kernel, scheme) if engine == "exponential"
+                       else _direct_bytes(grid, scene, scheme, window_steps))
+        history += held
+        building = max(building, extra)
+    N = grid.shape[0] * grid.shape[1]
+    M = _modes(grid)
+    nc = len(comps)
+    shear3d = not grid.plane and any(c in comps for c in (1, 3))
+    # per component: slip, rate, traction, f, trial slip and two temporaries of a step;
+    # spectra: two forward slots per component, one per channel, the rotations (3D shear),
+    # the FFT buffers; per mode: q, k1/q, k3/q, gamma and the kernels' prefactors
+    work = (nc * 7 + 6) * N * 8 + (2 * nc + len(channels) + (6 if shear3d else 0) + 2) * M * 16 \
+        + 10 * M * 8
+    law_fields = sum(1 for v in vars(scene.law).values() if np.ndim(v) == 2) + 4
+    load_fields = sum(1 for v in vars(scene.loading).values() if np.ndim(v) == 2)
+    work += (law_fields + load_fields) * N * 8
+    rec = scene.record
+    n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
+    frame = n1r * n3r * 8 * len(rec.fields)
+    nsnap = len(rec.snapshot_steps(scene.nsteps, scene.dt)) if rec.fields else 0
+    kept = min(nsnap, _FLUSH) * 2 if store else nsnap * 2
+    nstations = len(rec.stations or {})
+    series = (scene.nsteps + 1) * nstations * (3 * nc + 1) * 8 * (2 if nstations else 0)
+    records = kept * frame + series + 2 * N * 8
+    return MemoryEstimate(int(history), int(work), int(records), int(scene.nsteps), setup=int(building))
+
+
+def _meminfo(key):
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith(key + ":"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        return None
+    return None
+
+
+def _cgroup_room():
+    """Bytes left under this process's cgroup memory limit (v2, then v1); None without one."""
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            with open(limit_file) as fh:
+                text = fh.read().strip()
+            if text == "max" or int(text) >= 1 << 60:
+                return None
+            with open(usage_file) as fh:
+                used = int(fh.read().strip())
+            return max(0, int(text) - used)
+        except (OSError, ValueError):
+            continue
+    return None
+
+
+def available_memory() -> tuple[int, str]:
+    """(bytes, where the figure comes from): the least of MemAvailable (/proc/meminfo, or
+    the physical memory), the room under a cgroup memory limit, and env CRACKLAB_MEMORY_LIMIT."""
+    candidates = []
+    avail = _meminfo("MemAvailable")
+    if avail is None:
+        try:
+            avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            avail = None
+    if avail is not None:
+        candidates.append((avail, "available on this machine"))
+    room = _cgroup_room()
+    if room is not None:
+        candidates.append((room, "left under this process's cgroup memory limit"))
+    env = os.environ.get(LIMIT_ENV)
+    if env:
+        try:
+            candidates.append((parse_bytes(env), f"set by {LIMIT_ENV}={env}"))
+        except ValueError as exc:
+            raise MemoryBudgetError(LIMIT_ENV, str(exc)) from None
+    if not candidates:
+        return 1 << 62, "unknown"
+    return min(candidates)
+
+
+def check_memory(estimate: MemoryEstimate, *, processes: int = 1, what: str = "the run",
+                 hint: str = "") -> tuple[int, str]:
+    """Raise MemoryBudgetError when ``processes`` runs of ``estimate`` (a sweep's workers,
+    each with its interpreter, ``PROCESS_BYTES``) do not fit in the available memory;
+    return (available bytes, its source) otherwise."""
+    avail, source = available_memory()
+    need = estimate.total if processes <= 1 else processes * (estimate.total + PROCESS_BYTES)
+    if need > avail:
+        per = "" if processes <= 1 else f" ({processes} workers, each {fmt_bytes(estimate.total + PROCESS_BYTES)})"
+        raise MemoryBudgetError("memory", f"{what} needs {fmt_bytes(need) if processes > 1 else estimate.describe()}"
+                                          f"{per}, but {fmt_bytes(avail)} is {source}; refused before any step"
+                                          f"{'; ' + hint if hint else ''}")
+    return avail, source
+
+
+def calibrate(scene, *, steps: int = 12, seconds: float = 3.0) -> dict:
+    """Time the first steps of ``scene`` (at most ``steps``, or ``seconds`` of wall time)
+    and extrapolate: {"steps_timed", "ms_per_step", "setup_s", "run_s"}. The exponential
+    engine costs the same every step (the median step is the figure); the direct engine's
+    step grows with the history (a line through the timed steps, summed over the run)."""
+    import time
+
+    from ..history import resolve_engine
+    from .stepper import Stepper
+
+    t0 = time.perf_counter()
+    stepper = Stepper(scene)
+    setup = time.perf_counter() - t0
+    times = []
+    t = time.perf_counter()
+    for state in stepper:
+        now = time.perf_counter()
+        times.append(now - t)
+        t = now
+        if len(times) >= steps or sum(times) > seconds or state.n >= scene.nsteps:
+            break
+    timed = np.asarray(times[1:] if len(times) > 2 else times)     # the first step compiles
+    n = scene.nsteps + 1
+    med = float(np.median(timed))
+    total = med * n
+    if resolve_engine(scene.numerics.engine, scene.numerics.window) == "direct" and timed.size >= 4:
+        idx = np.arange(timed.size) + (len(times) - timed.size)
+        slope, icpt = np.polyfit(idx, timed, 1)
+        slope = max(float(slope), 0.0)
+        total = max(total, float(icpt) * n + 0.5 * slope * n * n)
+    return {"steps_timed": len(times), "ms_per_step": 1e3 * med, "setup_s": setup, "run_s": total}

@@ -1,0 +1,560 @@
+"""Write docs/toml.md, the reference of every key of a TOML scene, from the live definitions.
+
+    python docs/tools/toml_page.py            # rewrite docs/toml.md
+    python docs/tools/toml_page.py --check    # exit 1 if docs/toml.md is not what it would write
+
+What the page lists comes from the code: the sections and their keys from the dataclasses
+(``cracklab.model.scene_io.section_classes``, each key's kind of value from the decoder's
+``section_schema``, its default from the dataclass), the unit kind, accepted range and
+meaning of a key outside [law] from ``cracklab.model.keys``, and the laws from
+``cracklab.laws.LAWS``: each law's parameters with the unit, kind, range and meaning they
+declare (``laws.base.parameter``), its components, state variables and the first paragraph
+of its docstring. The one thing written here is a small example scene per law
+(``EXAMPLES``); a law without one stops the script. tests/docs/test_toml_page.py fails
+when the committed page differs from what this script writes, runs every example through
+``Scene.from_toml``, and checks that the values the definitions call refused are refused.
+"""
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import inspect
+import math
+import re
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+PAGE = ROOT / "docs" / "toml.md"
+try:
+    import cracklab  # noqa: F401
+except ImportError:  # run from a checkout without an install
+    sys.path.insert(0, str(ROOT))
+
+#: one small, valid scene per law kind (the page shows them; the test parses each)
+EXAMPLES = {
+    "constant_friction": '''\
+# Coulomb friction that follows the normal traction (no sigma_n), in the plane
+# problem: pressed by tau0_2 = -1, the plane slides where tau0_1 > mu_f = 0.6
+name = "constant_friction_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 1
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "constant_friction"
+mu_f = 0.6
+
+[loading]
+tau0_1 = [[0.5], [0.5], [0.5], [0.5], [0.5], [0.5], [0.7], [0.7],
+          [0.7], [0.7], [0.5], [0.5], [0.5], [0.5], [0.5], [0.5]]
+tau0_2 = -1.0
+
+[record]
+fields = ["delta_1", "tau_2"]
+every = 4
+''',
+    "coupled_cohesive": '''\
+# Modes I and II softening together in the plane problem: a crack of nodes 0-2
+# and 13-15 (across the periodic boundary) under a mixed, ramped load
+name = "coupled_cohesive_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 1
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "coupled_cohesive"
+tau_c = 1.0
+tau_s = 1.0
+delta_c = 0.02
+beta = 1.0
+mu_f = 0.3
+initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
+                 [false], [false], [false], [false], [false], [true], [true], [true]]
+
+[loading]
+tau0_1 = 0.3
+tau0_2 = 0.3
+time = "ramp"
+ramp_time = 0.1
+
+[record]
+fields = ["delta_1", "delta_2", "lambda_max"]
+''',
+    "linear_cohesive": '''\
+# A mode I crack in the plane problem: nodes 0-2 and 13-15 (the crack across the
+# periodic boundary) broken at t = 0, the plane under a suddenly applied tension
+name = "linear_cohesive_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 1
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "linear_cohesive"
+tau_c = 1.0
+delta_c = 0.01
+initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
+                 [false], [false], [false], [false], [false], [true], [true], [true]]
+
+[loading]
+tau0_2 = 0.4
+
+[record]
+fields = ["delta_2", "delta_max"]
+every = 4
+''',
+    "prescribed_rupture": '''\
+# Kostrov's crack: the strength drops from infinity to 0 as a circle growing at
+# 0.7 cs from the centre passes, over 0.05 time units
+name = "prescribed_rupture_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 32
+n3 = 32
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "prescribed_rupture"
+speed = 0.7
+origin = [0.5, 0.5]
+residual = 0.0
+strength_before = inf
+weakening_time = 0.05
+
+[loading]
+tau0_1 = 1.0
+
+[record]
+fields = ["delta_1"]
+
+[record.stations]
+centre = [0.5, 0.5]
+''',
+    "rate_state": '''\
+# TPV101 on a coarse grid (600 m): ageing law, sliding at 1e-12 m/s under 75 MPa,
+# nucleated by a 25 MPa patch of radius 3 km that grows over 1 s
+name = "rate_state_example"
+t_end = 2.0
+
+[units]
+length = "m"
+time = "s"
+stress = "Pa"
+
+[material]
+mu = 3.2038e10
+cs = 3464.0
+nu = 0.25
+
+[grid]
+n1 = 64
+n3 = 32
+L1 = 38400.0
+L3 = 19200.0
+
+[law]
+kind = "rate_state"
+a = 0.008
+b = 0.012
+L = 0.02
+V0 = 1e-6
+f0 = 0.6
+sigma_n = 120e6
+V_ini = 1e-12
+evolution = "ageing"
+
+[loading]
+tau0_1 = 75e6
+nucleation_dtau_1 = 25e6
+nucleation_radius = 3000.0
+nucleation_time = 1.0
+nucleation_x1 = 19200.0
+nucleation_x3 = 9600.0
+
+[record]
+fields = ["v_1", "psi"]
+every = 10
+
+[record.stations]
+hypocentre = [19200.0, 9600.0]
+''',
+    "slip_weakening": '''\
+# A TPV3-like fault on a coarse grid (about 470 m): slip weakening under 120 MPa,
+# nucleated from t = 0 by a shear stress raised up to 30 MPa within 3 km
+name = "slip_weakening_example"
+t_end = 1.0
+
+[units]
+length = "m"
+time = "s"
+stress = "Pa"
+
+[material]
+mu = 3.2038e10
+cs = 3464.0
+nu = 0.25
+
+[grid]
+n1 = 64
+n3 = 32
+L1 = 30000.0
+L3 = 15000.0
+
+[law]
+kind = "slip_weakening"
+mu_s = 0.677
+mu_d = 0.525
+D_c = 0.4
+sigma_n = 120e6
+
+[loading]
+tau0_1 = 70e6
+nucleation_dtau_1 = 30e6
+nucleation_radius = 3000.0
+nucleation_time = 0.0
+nucleation_x1 = 15000.0
+nucleation_x3 = 7500.0
+
+[record]
+fields = ["v_1", "slip"]
+every = 5
+''',
+    "traction_free": '''\
+# A traction-free plane under a uniform step of tension: it opens everywhere,
+# at the rate 2 cs tau0_2 / (mu a) (the radiation damping of mode I)
+name = "traction_free_example"
+t_end = 0.2
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 16
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "traction_free"
+contact = false
+
+[loading]
+tau0_2 = 1.0
+
+[record]
+fields = ["delta_2", "v_2"]
+''',
+}
+
+VALUE = {
+    "number": "number", "integer": "integer", "boolean": "boolean", "string": "string",
+    "numbers": "list of numbers", "strings": "list of strings", "field": "field", "mask": "mask",
+    "region": "table", "stations": "table", "any": "any",
+}
+
+HEADER = """\
+# TOML scene reference
+
+Every key of a scene file (`cracklab run SCENE.toml`, `Scene.from_toml`, a study's
+`study.scene`): the kind of value it takes, its unit, the range it must lie in and its
+default. How scenes are written, read and checked is on [Scenes](scenes.md); the Python
+names are on the [API reference](api.md).
+
+This page is written from the code by `docs/tools/toml_page.py` (`python
+docs/tools/toml_page.py`): the sections and keys from the scene's dataclasses, the
+ranges and meanings from `cracklab.model.keys` and from each law's parameter
+declarations (`cracklab.laws.base.parameter`). `tests/docs/test_toml_page.py` fails when
+the page is not what the script writes, parses every example below into a Scene, and
+checks that values outside each range are refused.
+
+## Values
+
+| value | in TOML |
+| --- | --- |
+| number | `1.5`, `2`, `3.2038e10`, `inf` where a range allows it |
+| integer | `64` (`64.0` is refused) |
+| boolean | `true`, `false` |
+| string | `"ramp"` |
+| list of numbers, list of strings | `[0.0, 0.1]`, `["delta_2", "v_2"]` |
+| table | an inline table `{ x1 = [0.2, 0.8] }` or a sub-table `[record.region]` |
+| field | a number (the same at every node), a nested list of n1 rows of n3 numbers, or a file reference (below) |
+| mask | a nested list of n1 rows of n3 booleans, or a file reference (below); absent: no node |
+
+A field's range holds at every node. Units are those of the scene's `[units]` table:
+"stress", "length" and "time" are its `stress`, `length` and `time` units, "velocity" is
+length / time, "1" a pure number, and "-" marks what is not a quantity (a name, a
+count, a switch). A key marked *required* has no default; *absent* means the key is left
+out (the default behaviour is then the one described). A key that is not on this page is
+refused, with the accepted keys in the message.
+
+## File references
+
+A field or mask can be read from a file instead of written out:
+
+```toml
+[law]
+tau_c = { file = "toughness.nc", var = "tau_c" }     # netCDF
+delta_c = { file = "toughness.zarr", var = "delta_c" } # Zarr
+initial_crack = { file = "crack.npy" }                 # numpy, one array: no var
+```
+
+| key | accepted | meaning |
+| --- | --- | --- |
+"""
+
+REFERENCE_RULES = """\
+
+- A relative path is taken from the directory of the scene file (for TOML text given to
+  `Scene.from_toml`, from its `base` argument, by default the current directory).
+- The array has the grid's shape: (n1, n3), or (n1, n3 + 1) with `grid.free_surface`;
+  in the plane problem (n3 = 1) an array of shape (n1,) is taken as (n1, 1).
+- A netCDF or Zarr variable lies on the dims `x1` and `x3` (in either order), and each
+  carries its coordinate, equal to the grid's nodes x1_i = i L1 / n1, x3_k = k L3 / n3
+  to a millionth of a cell. A field written for another grid or cell is refused, not
+  interpolated.
+- A mask is booleans, or integers 0 and 1 (netCDF has no boolean type). A field is
+  numbers; NaN (a missing value, a `_FillValue`) is refused. A float32 field stays
+  float32.
+- Each failure is one `InputError` that names the field and says what was expected: no
+  such file, an unknown format, no `var` (netCDF, Zarr) or a `var` (.npy), no such
+  variable (the message lists the file's variables), the wrong dims, shape or
+  coordinates, a mask that is not boolean.
+
+`Scene.to_toml(path)` writes a scene this way: its scalars in the TOML file `path` and
+every array-valued parameter into one netCDF file next to it, `<stem>.fields.nc`
+(variables `<section>_<key>` on (x1, x3) with the grid's coordinates), referenced from
+the TOML. A 128 x 64 random-toughness scene (`scenes.random_toughness(n1=128, n3=64)`)
+is {saved} lines of TOML and the sidecar, against {inline:,} lines with its fields inline
+(`Scene.to_toml()` without a path, which stays as it was). The sidecar is netCDF because
+it is one file (a Zarr store is a directory of many), compressed, and read by every tool
+of the field (xarray, `ncdump`, MATLAB, ParaView); it keeps float64 bits, float32 and
+boolean masks exactly; and the fields of one scene are small, so Zarr's chunked, parallel
+access buys nothing.
+"""
+
+
+def _markdown(text: str) -> str:
+    text = re.sub(r":[\w.]+:`~?([^`]+)`", r"`\1`", text)
+    return text.replace("``", "`")
+
+
+def first_paragraph(doc: str | None) -> str:
+    if not doc:
+        return ""
+    para = inspect.cleandoc(doc).split("\n\n")[0]
+    return _markdown(" ".join(line.strip() for line in para.splitlines()))
+
+
+def default(f: dataclasses.Field) -> str:
+    if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+        return "*required*"
+    value = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+    return literal(value)
+
+
+def literal(value) -> str:
+    if value is None:
+        return "*absent*"
+    if isinstance(value, bool):
+        return "`true`" if value else "`false`"
+    if isinstance(value, float) and math.isinf(value):
+        return "`inf`"
+    if isinstance(value, str):
+        return f'`"{value}"`'
+    if isinstance(value, (tuple, list)):
+        return "`[" + ", ".join(literal(v).strip("`") for v in value) + "]`"
+    if isinstance(value, dict):
+        return "`{" + ", ".join(f"{k} = {literal(v).strip('`')}" for k, v in value.items()) + "}`"
+    return f"`{value!r}`"
+
+
+def row(*cells) -> str:
+    return "| " + " | ".join(str(c).replace("|", "\\|") for c in cells) + " |"
+
+
+def key_table(rows) -> list[str]:
+    out = [row("key", "value", "unit", "accepted", "default", "meaning"), row(*["---"] * 6)]
+    out += [row(*r) for r in rows]
+    return out
+
+
+def section_rows(section: str, cls) -> list:
+    from cracklab.model.keys import SECTION_KEYS
+    from cracklab.model.scene_io import section_schema
+
+    schema = section_schema(section, cls)
+    keys = SECTION_KEYS[section]
+    missing = [f.name for f in dataclasses.fields(cls) if f.name not in keys]
+    if missing:
+        raise SystemExit(f"cracklab.model.keys.SECTION_KEYS[{section!r}] has no entry for {missing}")
+    rows = []
+    for f in dataclasses.fields(cls):
+        k = keys[f.name]
+        rows.append((f"`{f.name}`", VALUE[schema[f.name][0]], k.unit, k.accepted, default(f), k.doc))
+    return rows
+
+
+def components(cls) -> str:
+    comps = inspect.getattr_static(cls, "components")
+    if isinstance(comps, property):  # a friction law: shear, or all three without sigma_n
+        return "shear (1, 3); all (1, 2, 3) without `sigma_n`"
+    names = {(2,): "normal (2)", (1, 3): "shear (1, 3)", (1, 2, 3): "all (1, 2, 3)"}
+    return names.get(tuple(comps), str(tuple(comps)))
+
+
+def law_section(kind: str, cls) -> list[str]:
+    from cracklab.laws.base import parameter_docs
+    from cracklab.model.scene_io import section_schema
+
+    if kind not in EXAMPLES:
+        raise SystemExit(f"the law {kind!r} has no example: add one to EXAMPLES in docs/tools/toml_page.py")
+    schema = section_schema("law", cls)
+    docs = parameter_docs(cls)
+    lines = [f"### `kind = \"{kind}\"`", "", f"`{cls.__name__}`, acting on {components(cls)}. "
+             + first_paragraph(cls.__doc__), ""]
+    rows = []
+    for f in dataclasses.fields(cls):
+        unit, pkind, accepted, doc = docs[f.name]
+        if accepted is None:
+            accepted = "true or false at each node" if pkind == "mask" else "-"
+        value = VALUE[schema[f.name][0]]
+        if pkind == "mask" or (pkind == "option" and value in ("string", "boolean")):
+            unit = "-"
+        if pkind == "scalar":
+            value = "number"
+        rows.append((f"`{f.name}`", value, unit, accepted, default(f), doc))
+    lines += key_table(rows)
+    state = cls.state_variables
+    lines += ["", "State variables (`record.fields`): " + (", ".join(
+        f"`{n}` ({long}, {unit})" for n, (long, unit) in state.items()) or "none") + ".", ""]
+    lines += ["```toml", EXAMPLES[kind].rstrip("\n"), "```", ""]
+    return lines
+
+
+def saved_lines() -> tuple[int, int]:
+    """Lines of the TOML file ``Scene.to_toml(path)`` writes for a 128 x 64 random-toughness
+    scene, and of its TOML text with the fields inline."""
+    import tempfile
+
+    from cracklab import scenes
+
+    scene = scenes.random_toughness(n1=128, n3=64)
+    with tempfile.TemporaryDirectory() as tmp:
+        saved = len(scene.to_toml(Path(tmp) / "scene.toml").read_text().splitlines())
+    return saved, len(scene.to_toml().splitlines())
+
+
+def render() -> str:
+    from cracklab.laws import LAWS
+    from cracklab.model.keys import FILE_KEYS, TOP_KEYS, UNIT_KEYS
+    from cracklab.model.scene import Scene
+    from cracklab.model.scene_io import section_classes
+
+    extra = sorted(set(EXAMPLES) - set(LAWS))
+    if extra:
+        raise SystemExit(f"EXAMPLES of laws that do not exist: {extra}")
+    lines = [HEADER.rstrip("\n")]
+    lines += [row(f"`{k}`", key.accepted, key.doc) for k, key in FILE_KEYS.items()]
+    saved, inline = saved_lines()
+    lines.append(REFERENCE_RULES.rstrip("\n").format(saved=saved, inline=inline))
+    lines += ["", "## Top level", ""]
+    fields = {f.name: f for f in dataclasses.fields(Scene)}
+    rows = [(f"`{k}`", {"name": "string"}.get(k, "number"), key.unit, key.accepted, default(fields[k]), key.doc)
+            for k, key in TOP_KEYS.items()]
+    rows.append(("`[units]`", "table", "-", "the three keys below, or none", "all `\"1\"`",
+                 "the units of the scene's quantities"))
+    for section in ("material", "grid", "law", "loading", "record", "numerics"):
+        rows.append((f"`[{section}]`", "table", "-", "below", "*required*" if section in ("material", "grid", "law")
+                     else "every key at its default", ""))
+    rows.append(("`[materials.top]`, `[materials.bottom]`", "tables", "-", "the keys of `[material]`", "*absent*",
+                 "the half spaces x2 > 0 and x2 < 0, instead of `[material]`; two different materials are refused "
+                 "until their interface is implemented"))
+    lines += key_table(rows)
+    lines += ["", "## `[units]`", "", "All three or none; default `\"1\"` each (a dimensionless scene). The strings are "
+              "written to the output's `units` attrs as given.", ""]
+    lines += key_table([(f"`{k}`", "string", key.unit, key.accepted, '`"1"`', key.doc)
+                        for k, key in UNIT_KEYS.items()])
+    classes = section_classes()
+    titles = {
+        "material": "The half spaces' material (both sides).",
+        "grid": "The periodic grid on the fracture plane (docs/scenes.md, \"The grid\").",
+        "loading": "tau0_j(x1, x3) times a function of time (docs/equations.md, \"Loading\"); the nucleation keys "
+                   "go together: all of `nucleation_radius`, `nucleation_time`, `nucleation_x1`, `nucleation_x3` and "
+                   "one or both of `nucleation_dtau_1`, `nucleation_dtau_3`, or none.",
+        "record": "What the run records: grid fields at a cadence, station series (`[record.stations]`), "
+                  "optionally on a sub-region (`[record.region]`).",
+        "numerics": "Scheme options.",
+    }
+    for section in ("material", "grid"):
+        lines += ["", f"## `[{section}]`", "", titles[section], ""]
+        lines += key_table(section_rows(section, classes[section]))
+    lines += ["", "## `[law]`", "", f"`kind` picks the law, one of {', '.join(f'`{k}`' for k in sorted(LAWS))}; the "
+              "other keys are its parameters. Every law has `bonded`. A \"number\" parameter is one number, not a "
+              "field.", ""]
+    for kind in sorted(LAWS):
+        lines += law_section(kind, LAWS[kind])
+    for section in ("loading", "record", "numerics"):
+        lines += [f"## `[{section}]`", "", titles[section], ""]
+        lines += key_table(section_rows(section, classes[section]))
+        lines.append("")
+    return "\n".join(lines)
+
+
+def examples_of(text: str) -> list[str]:
+    """The bodies of the ```toml blocks of the page that are whole scenes (they have t_end)."""
+    blocks = re.findall(r"^```toml[ \t]*\n(.*?)^```[ \t]*$", text, re.S | re.M)
+    return [b for b in blocks if re.search(r"^t_end\s*=", b, re.M)]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/toml.md is out of date")
+    args = ap.parse_args(argv)
+    text = render()
+    if args.check:
+        ok = PAGE.exists() and PAGE.read_text() == text
+        print("docs/toml.md is up to date" if ok else "docs/toml.md is out of date: run python docs/tools/toml_page.py")
+        return 0 if ok else 1
+    PAGE.write_text(text)
+    print(f"wrote {PAGE}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
