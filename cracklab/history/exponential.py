@@ -47,7 +47,8 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..solver.weights import FORMULATIONS, RULES, convolution_weights
+from ..solver.kernels import FACE_KERNELS
+from ..solver.weights import FORMULATIONS, RULES, convolution_weights, product_taps
 from . import tables
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
@@ -312,11 +313,20 @@ class ExponentialEngine:
         # the exact taps, shared by every engine on the same gammas (history/tables.py)
         key = ("exponential-taps", kernel, tables.digest(ug), tables.digest(jd_u), self.lag, float(nu), rule,
                formulation)
-        self._wflat = tables.memoised(key + ("lag",), lambda: np.asarray(
-            exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel())
-        if rule == "product":  # start-up term E_0(n): exact for n < J0, fitted beyond
-            self._e0flat = tables.memoised(key + ("start0",), lambda: np.asarray(
-                exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact), dtype=float).ravel())
+        if rule == "product" and kernel in FACE_KERNELS:
+            # a face kernel's lag weights and start-up term E_0(n) (exact for n < J0, fitted
+            # beyond) from one pass over the cells (the pair's kernels keep the weights of
+            # product_weights to the bit: one-material runs are unchanged)
+            both = tables.memoised(key + ("lag+start0",), lambda: np.stack(
+                product_taps(kernel, ug, jd_u, self.lag, nu=nu)))
+            self._wflat, self._e0flat = both[0], both[1]
+        else:
+            self._wflat = tables.memoised(key + ("lag",), lambda: np.asarray(
+                exact_weights(kernel, ug[uu], jj + self.lag, **exact), dtype=float).ravel())
+            if rule == "product":  # start-up term E_0(n): exact for n < J0, fitted beyond
+                self._e0flat = tables.memoised(key + ("start0",), lambda: np.asarray(
+                    exact_weights(kernel, ug[uu], jj + self.lag, part="start0", **exact), dtype=float).ravel())
+        if rule == "product":
             self._e0c = 2.0 * c[None, :] * _start_factor(z)
             self._e0c[zero] = 0.0
             self._e0pow = None

@@ -20,7 +20,12 @@ analytic off the branch cuts from s = +-i and +-i a, like those of the pair.
 
 Time domain, without a closed form: the Taylor series at T = 0 (the coefficients are those
 of the expansion of L[H] in 1/s) for T <= T_s, and the Bromwich integral folded onto the
-branch cuts (solver/cuts.py) beyond, each where it is accurate to ~1e-12.
+branch cuts (solver/cuts.py) beyond, each where it is accurate to ~1e-12. On T_s < T <=
+T_TABLE, where the exact taps of the history engines lie, the cut representation (of H and
+of its first two antiderivatives) is read from piecewise Chebyshev interpolants of it
+(degree 20 on pieces 0.5 long, built once per kernel and nu from the cut sums: they
+reproduce them to their own round-off, ~1e-15 of the function's size), a few dozen
+operations per time instead of a sum over ~500 exponentials.
 """
 from __future__ import annotations
 
@@ -169,13 +174,122 @@ def _quadrature(kernel, nu):
     return cuts.quadrature(lambda s, A, B, a: branch_transform(kernel, s, A, B, a), nu, (1.0, _ratio(nu)))
 
 
-def _taylor_sum(c, T, order):
-    T = np.asarray(T, dtype=float)
-    out = np.zeros_like(T)
-    fact = math.factorial
+@lru_cache(maxsize=256)
+def _taylor_coefficients(kernel, nu, order):
+    """d_k of sum_k d_k T^k, the series of the regular part's antiderivative of ``order``
+    (c_m T^(m - 1 + order) / (m - 1 + order)!), highest power first, for Horner's rule."""
+    c = _series_cached(kernel, nu)
+    d = np.zeros(c.size - 1 + order)
     for m in range(1, c.size):
         k = m - 1 + order
-        out += c[m] * T**k / fact(k)
+        d[k] = c[m] / math.factorial(k)
+    # on T <= T_s the terms beyond ~30 are below 1e-20 of the largest: left out
+    size = np.abs(d) * series_limit(nu) ** np.arange(d.size)
+    keep = int(np.flatnonzero(size > 1e-20 * size.max()).max()) + 1
+    return d[:keep][::-1].copy()
+
+
+def _taylor_sum(c, T, order):
+    """sum_{m>=1} c_m T^(m - 1 + order) / (m - 1 + order)! (Horner's rule)."""
+    T = np.asarray(T, dtype=float)
+    d = np.zeros(c.size - 1 + order)
+    for m in range(1, c.size):
+        d[m - 1 + order] = c[m] / math.factorial(m - 1 + order)
+    return _horner(d[::-1], T)
+
+
+def _horner(d, T):
+    out = np.full(T.shape, d[0])
+    for dk in d[1:]:
+        out *= T
+        out += dk
+    return out
+
+
+#: the Chebyshev interpolants of the cut representation cover T_s < T <= T_TABLE (the exact
+#: taps of the history engines lie below ~10: T0 = 4 and a few gamma, the levels' margin)
+T_TABLE = 12.0
+_PIECE, _DEGREE = 0.5, 20
+
+
+@lru_cache(maxsize=64)
+def _anchors(kernel, nu):
+    """What the continuation from T_s needs, per kernel: the series' antiderivatives at T_s
+    (orders 1, 2) and the cut representation's there (orders 1, 2)."""
+    c = _series_cached(kernel, nu)
+    Ts = np.array([series_limit(nu)])
+    q = _quadrature(kernel, nu)
+    return (_taylor_sum(c, Ts, 1)[0], _taylor_sum(c, Ts, 2)[0],
+            cuts.evaluate(q, Ts, order=1)[0], cuts.evaluate(q, Ts, order=2)[0])
+
+
+def _far(kernel, T, nu, order):
+    """The regular part's function of ``order`` for T > T_s from the cut sums, continued from
+    the series at T_s (orders 1 and 2)."""
+    q = _quadrature(kernel, nu)
+    if order == 0:
+        return cuts.evaluate(q, T)
+    Ts = series_limit(nu)
+    s1, s2, k1, k2 = _anchors(kernel, nu)
+    I1 = cuts.evaluate(q, T, order=1) - k1
+    if order == 1:
+        return s1 + I1
+    J = cuts.evaluate(q, T, order=2) - k2 - (T - Ts) * k1
+    return s2 + s1 * (T - Ts) + J
+
+
+@lru_cache(maxsize=192)
+def _table(kernel, nu, order):
+    """Chebyshev coefficients (pieces, degree + 1) of :func:`_far` on [T_s, T_TABLE] in
+    pieces of length _PIECE (the last one reaching T_TABLE or a little beyond)."""
+    Ts = series_limit(nu)
+    n = int(math.ceil((T_TABLE - Ts) / _PIECE))
+    x = np.cos(np.pi * (np.arange(_DEGREE + 1) + 0.5) / (_DEGREE + 1))   # first-kind nodes
+    lo = Ts + _PIECE * np.arange(n)
+    vals = _far(kernel, (lo[:, None] + 0.5 * _PIECE * (x[None, :] + 1.0)).ravel(), nu, order)
+    vals = vals.reshape(n, _DEGREE + 1)
+    # c_k = (2 - [k = 0]) / (N + 1) sum_j f(x_j) T_k(x_j)
+    Tk = np.cos(np.outer(np.arange(_DEGREE + 1), np.pi * (np.arange(_DEGREE + 1) + 0.5) / (_DEGREE + 1)))
+    coef = vals @ Tk.T * (2.0 / (_DEGREE + 1))
+    coef[:, 0] *= 0.5
+    coef = np.ascontiguousarray(coef.T)         # (degree + 1, pieces): one row per order k
+    coef.setflags(write=False)
+    return coef
+
+
+def _from_table(kernel, T, nu, order):
+    """:func:`_far` on T_s < T <= T_TABLE from its Chebyshev pieces (Clenshaw's recurrence)."""
+    coef = _table(kernel, nu, order)
+    Ts = series_limit(nu)
+    u = (T - Ts) / _PIECE
+    i = np.minimum(u.astype(np.int64), coef.shape[1] - 1)
+    x = 2.0 * (u - i) - 1.0
+    # the times grouped by piece (a counting sort), each group with its own coefficients
+    order = np.argsort(i.astype(np.int16), kind="stable")
+    bounds = np.concatenate([[0], np.cumsum(np.bincount(i, minlength=coef.shape[1]))])
+    xs = x[order]
+    out = np.empty(T.shape)
+    res = np.empty(xs.shape)
+    for p in np.flatnonzero(np.diff(bounds)):
+        sl = slice(bounds[p], bounds[p + 1])
+        res[sl] = _clenshaw(coef[:, p], xs[sl])
+    out[order] = res
+    return out
+
+
+def _clenshaw(c, x):
+    """sum_k c_k T_k(x)."""
+    x2 = 2.0 * x
+    b1 = np.full(x.shape, c[-1])
+    b2 = np.zeros(x.shape)
+    for ck in c[-2:0:-1]:
+        b0 = x2 * b1
+        b0 -= b2
+        b0 += ck
+        b1, b2 = b0, b1
+    out = x * b1
+    out -= b2
+    out += c[0]
     return out
 
 
@@ -184,28 +298,18 @@ def _parts(kernel, T, nu, order):
     T = np.asarray(T, dtype=float)
     if np.any(T < 0) or np.any(np.isnan(T)):
         raise ValueError("T must be >= 0")
-    c = _series_cached(kernel, float(nu))
+    nu = float(nu)
     Ts = series_limit(nu)
-    near = T <= Ts
     out = np.empty(T.shape)
+    near = T <= Ts
+    mid = ~near & (T <= T_TABLE)
+    far = T > T_TABLE
     if np.any(near):
-        out[near] = _taylor_sum(c, T[near], order)
-    if np.any(~near):
-        q = _quadrature(kernel, float(nu))
-        Tf = T[~near]
-        if order == 0:
-            out[~near] = cuts.evaluate(q, Tf)
-        else:
-            # continue the antiderivatives from T_s with the cut representation
-            base = _taylor_sum(c, np.array([Ts]), order)[0]
-            I1 = cuts.evaluate(q, Tf, order=1) - cuts.evaluate(q, np.array([Ts]), order=1)[0]
-            if order == 1:
-                out[~near] = base + I1
-            else:
-                i1s = _taylor_sum(c, np.array([Ts]), 1)[0]
-                J = (cuts.evaluate(q, Tf, order=2) - cuts.evaluate(q, np.array([Ts]), order=2)[0]
-                     - (Tf - Ts) * cuts.evaluate(q, np.array([Ts]), order=1)[0])
-                out[~near] = base + i1s * (Tf - Ts) + J
+        out[near] = _horner(_taylor_coefficients(kernel, nu, order), T[near])
+    if np.any(mid):
+        out[mid] = _from_table(kernel, T[mid], nu, order)
+    if np.any(far):
+        out[far] = _far(kernel, T[far], nu, order)
     return out
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputError
 from . import kernels as _k
 
-__all__ = ["RULES", "FORMULATIONS", "halves_last", "convolution_weights", "product_weights"]
+__all__ = ["RULES", "FORMULATIONS", "halves_last", "convolution_weights", "product_weights", "product_taps"]
 
 RULES = ("discretized", "trapezoid", "simpson", "exact")
 FORMULATIONS = ("displacement", "velocity")
@@ -204,6 +204,44 @@ def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
             lag = product_weights(kernel, g, 1 - i, nu=nu, order=3, part="lag")
             out = np.where(n == 1, cell(np.zeros_like(n), LINEAR, i) - lag, out)
     return out[()] if out.ndim == 0 else out
+
+
+def product_taps(kernel, gamma, taps, lag, *, nu=0.25):
+    """The order-1 product weights of runs of consecutive lags, with every cell's moments
+    computed once: for each ``gamma[u]`` the lags j = lag .. lag + taps[u] - 1, as two
+    flat arrays (the runs one after the other) of ``product_weights(..., part="lag")`` and
+    ``part="start0"`` at those (gamma, j) (the same numbers: W_j and E_0(j) share the cells
+    j - 1 and j, which product_weights evaluates anew for each)."""
+    from .kernels import ALL_KERNELS
+
+    if kernel not in ALL_KERNELS:
+        raise InputError("kernel", f"must be one of {', '.join(map(repr, ALL_KERNELS))}; got {kernel!r}")
+    nu = _poisson(nu)
+    g = np.asarray(gamma, dtype=float).ravel()
+    taps = np.asarray(taps, dtype=np.int64).ravel()
+    lag = int(lag)
+    if g.shape != taps.shape or np.any(taps < 0) or lag < 0:
+        raise InputError("taps", "must be one non-negative count per gamma (and lag >= 0)")
+    if not np.all(np.isfinite(g)) or np.any(g < 0):
+        raise InputError("gamma", "must be finite and >= 0")
+    first = max(lag - 1, 0)
+    ncell = np.where(taps > 0, lag + taps - first, 0)          # cells first .. lag + taps - 1 per gamma
+    cstart = np.concatenate([[0], np.cumsum(ncell)[:-1]]).astype(np.int64)
+    uc = np.repeat(np.arange(g.size), ncell)
+    cc = first + np.arange(uc.size) - cstart[uc]
+    M = _moments_at(kernel, g[uc], cc, nu)
+    # the same contraction as product_weights' cell(), on all cells at once
+    a = np.tensordot(LINEAR[0], M, axes=1)   # node 0 of cell c: W_{c+1}'s part
+    b = np.tensordot(LINEAR[1], M, axes=1)   # node 1 of cell c: W_c's part, -E_0(c)
+    tstart = np.concatenate([[0], np.cumsum(taps)[:-1]]).astype(np.int64)
+    ut = np.repeat(np.arange(g.size), taps)
+    j = lag + np.arange(ut.size) - tstart[ut]
+    here = cstart[ut] + (j - first)                          # cell j
+    prev = here - 1                                          # cell j - 1 (j >= 1)
+    has = j >= 1
+    w = np.where(has, a[np.where(has, prev, here)], 0.0) + b[here]
+    e0 = np.where(has, -b[here], 0.0)
+    return w, e0
 
 
 def _moments_at(kernel, g, c, nu):

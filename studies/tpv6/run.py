@@ -432,8 +432,10 @@ and velocity and the traction, and the rupture-time contours.
 
 Wall times on the project's 2-core machine shared with other long jobs (not a benchmark).
 The set-up is the history engines' exact taps of the four face kernels (H11, H22, H12,
-III) of each side, evaluated on their branch cuts for every distinct gamma; it grows
-about as the square of the number of nodes along a side and dominates the run.
+III) of each side for every distinct gamma, read from the kernels' Chebyshev tables
+(solver/face_kernels.py); it was 6, 15 and 24 min at 400, 200 and 100 m when every tap
+summed the branch cuts (the 200 m set-up alone: 957 s then, 3.8 s now, on the same host in
+one sitting; docs/performance.md, "Bimaterial interface").
 Time stepping: `Numerics(formulation="{FORMULATION}", engine="{ENGINE}")`, the product
 scheme at the builder's beta (relative to the near side's c_s, which sets dt).
 {"Runs stopped by the solver: " + ", ".join(stopped) + "." if stopped else ""}

@@ -112,3 +112,87 @@ def test_exponential_fits_of_the_face_kernels(kernel):
 def test_unknown_kernel_is_refused():
     with pytest.raises(ValueError, match="H11"):
         K.C("H13", 1.0)
+
+
+@pytest.mark.parametrize("nu", NUS)
+@pytest.mark.parametrize("kernel", fk.FACE_KERNELS)
+def test_tables_reproduce_the_cut_sums(kernel, nu):
+    """On T_s < T <= T_TABLE the kernel and its two antiderivatives come from Chebyshev
+    pieces of the cut representation: they reproduce it to its round-off (the pieces' ends
+    and the table's end included), and the cut sums take over beyond."""
+    Ts = fk.series_limit(nu)
+    T = np.concatenate([np.random.default_rng(5).uniform(Ts, fk.T_TABLE, 2000),
+                        Ts + fk._PIECE * np.arange(1, 8), [np.nextafter(Ts, 99.0), fk.T_TABLE]])
+    for order in (0, 1, 2):
+        want = fk._far(kernel, T, nu, order)
+        got = fk._parts(kernel, T, nu, order)
+        scale = max(1.0, np.abs(want).max())
+        assert np.max(np.abs(got - want)) <= 2e-14 * scale, order
+        beyond = np.array([fk.T_TABLE + 0.3, 40.0])
+        np.testing.assert_array_equal(fk._parts(kernel, beyond, nu, order), fk._far(kernel, beyond, nu, order))
+
+
+def test_taylor_part_keeps_the_series():
+    """The Horner sum of the series (trailing terms below 1e-20 of the largest left out)
+    equals the term-by-term sum on [0, T_s]."""
+    import math
+
+    for nu in NUS:
+        Ts = fk.series_limit(nu)
+        T = np.linspace(0.0, Ts, 301)
+        for kernel in fk.FACE_KERNELS:
+            c = fk.series(kernel, nu)
+            for order in (0, 1, 2):
+                want = sum(c[m] * T ** (m - 1 + order) / math.factorial(m - 1 + order) for m in range(1, c.size))
+                np.testing.assert_allclose(fk._parts(kernel, T, nu, order), want, rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("kernel", ["H11", "H12", "H22", "III", "II"])
+@pytest.mark.parametrize("lag", [0, 1, 2])
+def test_product_taps_equal_product_weights(kernel, lag):
+    from cracklab.history.exponential import direct_taps
+    from cracklab.solver.weights import product_taps, product_weights
+
+    g = np.unique(np.concatenate([[0.0], np.random.default_rng(1).uniform(0.005, 0.9, 40)]))
+    jd = direct_taps(g, lag, 4.0, extra=1, minimum=8)
+    w, e0 = product_taps(kernel, g, jd, lag, nu=0.3)
+    u = np.repeat(np.arange(g.size), jd)
+    j = lag + np.arange(u.size) - np.concatenate([[0], np.cumsum(jd)[:-1]])[u]
+    np.testing.assert_allclose(w, product_weights(kernel, g[u], j, nu=0.3, order=1, part="lag"), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(e0, product_weights(kernel, g[u], j, nu=0.3, order=1, part="start0"), rtol=0,
+                               atol=1e-15)
+
+
+def test_product_taps_refuse_bad_input():
+    from cracklab.errors import InputError
+    from cracklab.solver.weights import product_taps
+
+    with pytest.raises(InputError, match="taps"):
+        product_taps("H11", [0.1, 0.2], [3], 1)
+    with pytest.raises(InputError, match="gamma"):
+        product_taps("H11", [-0.1], [3], 1)
+    with pytest.raises(InputError, match="kernel"):
+        product_taps("H13", [0.1], [3], 1)
+
+
+def test_face_engine_taps_do_not_sum_the_cuts(monkeypatch):
+    """The exact taps of a face kernel's exponential engine (here about 2 x 10^4 of them, ten
+    Gauss points each) are read from the tables: the cut sums run only to build them."""
+    from cracklab.history import ExponentialEngine, tables
+
+    points = []
+    real = cuts.evaluate
+
+    def counting(quad, T, order=0, chunk=2048):
+        points.append(np.count_nonzero(np.asarray(T) <= fk.T_TABLE))   # the fit's own checks go beyond
+        return real(quad, T, order, chunk)
+
+    monkeypatch.setattr(fk.cuts, "evaluate", counting)
+    for f in (fk._table, fk._anchors, fk._quadrature):
+        f.cache_clear()
+    tables.clear()
+    g = np.linspace(0.002, 0.5, 400)
+    eng = ExponentialEngine(kernel="H22", gamma=g, nu=0.27, rule="product", formulation="velocity", lag=1,
+                            nsteps=500)
+    assert eng._wflat.size > 2e4
+    assert sum(points) < 3 * 30 * 21 + 10      # three tables of < 30 pieces, 21 nodes each, and the anchors
