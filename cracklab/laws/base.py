@@ -141,10 +141,16 @@ class Law:
         """Step (v): the velocity (and traction) from the elastic estimate ``tau_star``."""
         return solve_velocity(self, state, tau_star, delta, eta, dt, strength, load, traction)
 
-    def applied_strength(self, strength, tau):
+    def applied_strength(self, strength, tau, state=None):
         """The strength step (v) applied (what the recorder records as ``strength``),
-        from ``strength`` (of :meth:`strength`) and the traction ``tau`` of the step."""
+        from ``strength`` (of :meth:`strength`), the traction ``tau`` of the step and the
+        law's ``state`` after it."""
         return strength
+
+    def unrecordable(self, name):
+        """Why the state variable ``name`` (one of ``state_variables``) is not recorded with
+        these parameters, or None when it is (all of them by default)."""
+        return None
 
     def check_scene(self, scene) -> None:
         """Checks of the law against the rest of its scene (its load, material, grid), made

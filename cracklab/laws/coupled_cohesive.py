@@ -80,7 +80,7 @@ class CoupledCohesive(Law):
         s = self.tau_s * factor
         return s + self.mu_f * np.maximum(0.0, -tau[2]) if 2 in tau else s
 
-    def applied_strength(self, strength, tau):
+    def applied_strength(self, strength, tau, state=None):
         """The shear strength where a shear component is active, else the normal one."""
         if any(c in tau for c in SHEAR):
             return self.shear_strength(strength, tau)

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import InputError, SimulationError, check_fields_nesting
 from .base import SHEAR, bonded_mask, check_parameter, parameter
-from .friction import Friction
+from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 from .solve import solve_velocity
 
 EVOLUTIONS = ("ageing", "slip")
@@ -331,7 +331,8 @@ class RateState(Friction):
     weakening with ``f_w`` and ``V_w`` (slip law only). The initial state: ``psi_ini``,
     or from the initial slip rate ``V_ini`` and the load at t = 0, sigma f(V_ini, psi) =
     |tau0| - eta V_ini (both: they must agree). ``sigma_n`` compressive positive; None:
-    the current normal traction (laws/friction.py)."""
+    the current normal traction, or its regularised form with ``normal_slip_scale`` and/or
+    ``normal_time`` (laws/friction.py)."""
 
     a: float | np.ndarray = parameter(accepted="> 0", doc="direct-effect parameter")
     b: float | np.ndarray = parameter(accepted="> 0", doc="evolution-effect parameter")
@@ -353,9 +354,11 @@ class RateState(Friction):
         doc="weakened friction coefficient of strong velocity weakening")
     V_w: float | np.ndarray | None = parameter(
         unit="velocity", default=None, accepted="> 0; with f_w", doc="weakening slip rate of strong velocity weakening")
+    normal_slip_scale: float | np.ndarray | None = normal_slip_scale()
+    normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "rate_state"
-    state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1")}
+    state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1"), **NORMAL_STATE}
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
@@ -364,6 +367,7 @@ class RateState(Friction):
         _check_finite(self, "f0")
         if self.sigma_n is not None:
             check_parameter(self, "sigma_n", allow_equal=True)
+        self.check_normal()
         if self.V_ini is None and self.psi_ini is None:
             raise InputError("law.V_ini", "is required: the initial slip rate (> 0; the initial state then "
                                           "follows from the load at t = 0), or give law.psi_ini, the initial state")
@@ -394,7 +398,8 @@ class RateState(Friction):
             np.array(np.broadcast_to(np.asarray(self.psi_ini, dtype=float), shape))
         state = {"psi": psi, "psi_old": psi.copy(), "V": np.zeros(shape), "V_old": np.zeros(shape),
                  "lnV": np.full(shape, -np.inf), "strength": np.zeros(shape), "stage": INITIAL,
-                 "newton_evaluations": 0, "newton_solves": 0, "newton_most": 0, "spacing": [grid.dx1, grid.dx3]}
+                 "newton_evaluations": 0, "newton_solves": 0, "newton_most": 0, "spacing": [grid.dx1, grid.dx3],
+                 **self.normal_state(grid)}
         if self.evolution == "ageing":
             del state["psi_old"]
             state["z"], state["z_old"] = np.zeros(shape), np.zeros(shape)
@@ -407,6 +412,7 @@ class RateState(Friction):
     def update(self, state, delta, dt, v_prev, t, tau_prev=None):
         """A new step: the state and V of the last one start this one's state update (the
         arrays swap: the step's solves write every point of z and V anew)."""
+        self.normal_update(state, dt, v_prev)
         if v_prev is None:
             state["stage"] = INITIAL
             return
@@ -419,12 +425,13 @@ class RateState(Friction):
         """The strength sigma f(V, psi) the step's solve finds (filled in by :meth:`solve`)."""
         return state["strength"]
 
-    def applied_strength(self, strength, tau):
+    def applied_strength(self, strength, tau, state=None):
         return strength
 
     def check_scene(self, scene):
         """The initial state from V_ini needs, at every point, a shear load at t = 0 above
         eta V_ini under compression; given psi_ini too, the two must agree with it."""
+        super().check_scene(scene)
         if self.V_ini is None:
             return
         grid = scene.grid
@@ -468,7 +475,7 @@ class RateState(Friction):
         v, tau = {}, {}
         if self.follows_normal and 2 in tau_star:
             v, tau = solve_velocity(self, state, {2: tau_star[2]}, delta, eta, dt, 0.0, part((2,)), True)
-            sigma = np.maximum(0.0, -tau[2])
+            sigma = self.normal_stress(state, tau[2])
         else:
             sigma = self.sigma_n
         stage = state["stage"]

@@ -7,7 +7,7 @@ import numpy as np
 
 from ..errors import InputError, check_fields_nesting
 from .base import SHEAR, bonded_mask, check_parameter, parameter
-from .friction import Friction
+from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 
 
 @dataclass(frozen=True)
@@ -15,7 +15,8 @@ class SlipWeakening(Friction):
     """Linear slip-weakening friction: mu_s sigma_n -> mu_d sigma_n over D_c of slip.
 
     ``sigma_n`` is the (compressive positive) normal stress; None: the current normal
-    traction, max(0, -tau_2) (laws/friction.py). The slip is the accumulated slip path.
+    traction, max(0, -tau_2), or its regularised form with ``normal_slip_scale`` and/or
+    ``normal_time`` (laws/friction.py). The slip is the accumulated slip path.
     In 3D the slip rate is collinear with the shear traction.
     """
 
@@ -26,9 +27,11 @@ class SlipWeakening(Friction):
     sigma_n: float | np.ndarray | None = parameter(
         unit="stress", default=None, accepted=">= 0",
         doc="normal stress, compressive positive; absent: the current normal traction max(0, -tau_2)")
+    normal_slip_scale: float | np.ndarray | None = normal_slip_scale()
+    normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "slip_weakening"
-    state_variables = {"slip": ("slip path", "length")}
+    state_variables = {"slip": ("slip path", "length"), **NORMAL_STATE}
 
     def __post_init__(self):
         check_fields_nesting(self, "law")
@@ -37,6 +40,7 @@ class SlipWeakening(Friction):
         check_parameter(self, "D_c")
         if self.sigma_n is not None:
             check_parameter(self, "sigma_n", allow_equal=True)
+        self.check_normal()
         try:
             above = np.asarray(self.mu_d) > np.asarray(self.mu_s)
         except ValueError:          # fields of different shapes: the scene names the wrong one
@@ -47,9 +51,10 @@ class SlipWeakening(Friction):
                              "must be <= law.mu_s at every point of the field")
 
     def init_state(self, grid):
-        return {"slip": np.zeros(grid.shape)}
+        return {"slip": np.zeros(grid.shape), **self.normal_state(grid)}
 
     def update(self, state, delta, dt, v_prev, t, tau_prev=None):
+        self.normal_update(state, dt, v_prev)
         if v_prev is not None:
             speed = np.sqrt(sum(v_prev[c] ** 2 for c in v_prev if c in SHEAR))
             state["slip"] += dt * speed

@@ -187,6 +187,8 @@ class Scene:
         self.record.station_nodes(self.grid)
         state = type(self.law).state_variables
         for f in self.record.fields:
+            if f in state and self.law.unrecordable(f):
+                raise InputError("record.fields", self.law.unrecordable(f))
             if f in state or f == "strength":
                 continue
             if face_field(f):

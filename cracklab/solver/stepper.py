@@ -137,7 +137,8 @@ class Stepper:
             self.response.settle(v_new)
             self.v, self.tau, self.n = v_new, tau, n + 1
             self._check(n, t, v_new, self.load.factor(t, length))
-            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(law.applied_strength(strength, tau), grid.shape),
+            applied = law.applied_strength(strength, tau, self.lstate)
+            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(applied, grid.shape),
                         self.lstate, self._faces(v_new))
 
     def _faces(self, v_new):

@@ -106,7 +106,10 @@ PROBES = {"> 0": ((0.0, -1.0, INF), (1e-3,)), ">= 0": ((-1.0, INF), (0.0,)),
 #: (None: without that key)
 CONTEXT = {("rate_state", "f_w"): {"evolution": "slip", "V_w": 0.1},
            ("rate_state", "V_w"): {"evolution": "slip", "f_w": 0.2},
-           ("rate_state", "psi_ini"): {"V_ini": None}}
+           ("rate_state", "psi_ini"): {"V_ini": None},
+           # the regularised normal stress goes without sigma_n
+           **{(kind, name): {"sigma_n": None} for kind in ("slip_weakening", "rate_state", "constant_friction")
+              for name in ("normal_slip_scale", "normal_time")}}
 
 
 @pytest.mark.parametrize("kind", sorted(LAWS))

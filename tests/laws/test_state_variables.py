@@ -31,5 +31,5 @@ def test_a_state_variable_of_another_law_is_refused():
 
 
 def test_an_unknown_name_lists_the_state_variables():
-    with pytest.raises(InputError, match=r"or a state variable of the law \(delta_max, lambda_max, psi, slip\)"):
+    with pytest.raises(InputError, match=r"or a state variable of the law \(delta_max, lambda_max, psi, sigma_eff, slip\)"):
         Record(fields=("theta",))
