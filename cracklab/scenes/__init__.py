@@ -217,7 +217,8 @@ TPV6_NEAR = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
 TPV6_FAR = Material(mu=(2670.0 / 1.2) * (3464.0 / 1.6)**2, cs=3464.0 / 1.6, nu=0.25)
 
 
-def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
+def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0),
+         materials=None):
     """SCEC TPV6 (see shared/reference/tpv6_mdsbi/README.md): a vertical strike-slip fault
     between two materials, reaching a free surface; SI units.
 
@@ -235,7 +236,8 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     in units of 100 m, ``TPV6_REFERENCE_STATIONS`` the reference's) and the rupture time
     (slip rate above 1 mm/s); ``record`` replaces that (add the faces' fields ``u_1_top``,
     ... to record each side's motion). beta: at most 0.125 as ``tpv3``, relative to the
-    near side's c_s (it sets dt). See docs/tpv6.md."""
+    near side's c_s (it sets dt). ``materials`` = (top, bottom) replaces the pair (None:
+    (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/tpv6.md."""
     dx = check_positive("dx", dx)
     try:
         L1, L3 = (float(x) for x in domain)
@@ -257,9 +259,13 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV6_STATIONS}
     numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
     comps = (1, 2, 3)
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step")
-        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=TPV6_NEAR.nu))
-    return Scene(materials=(TPV6_FAR, TPV6_NEAR), grid=grid, law=law,
+    pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
+    if not isinstance(pair, (tuple, list)) or len(pair) != 2 or not all(isinstance(m, Material) for m in pair):
+        raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step"), for the side that sets dt
+        fast = max(pair, key=lambda m: m.cs)
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
+    return Scene(materials=tuple(pair), grid=grid, law=law,
                  loading=Loading(tau0_1=tau0, tau0_2=-120.0e6), t_end=t_end, beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv6")

@@ -87,13 +87,14 @@ def _complete(store, scene):
         return False
 
 
-def run_one(dx, t_end, out, force=False, log=print):
+def run_one(dx, t_end, out, force=False, log=print, normal=None):
     """Run (or reuse) one grid spacing; return its metadata dict ("error": the solver's
-    message when it stopped the run)."""
+    message when it stopped the run). ``normal``: the law's regularised normal stress
+    (scene.build_scene)."""
     from cracklab.errors import SimulationError
     from cracklab.output.simulate import simulate
 
-    scene = build_scene(dx, t_end)
+    scene = build_scene(dx, t_end, normal=normal)
     store = store_path(out, dx)
     meta_path = store.with_suffix(".json")
     if not force and _complete(store, scene):
@@ -129,7 +130,7 @@ def run_one(dx, t_end, out, force=False, log=print):
             "beta": scene.beta, "dt": scene.dt, "nsteps": scene.nsteps, "wall_s": wall, "setup_s": setup,
             "s_per_step": (wall - setup) / scene.nsteps, "domain": [g.L1, g.L3], "formulation": scene.formulation,
             "engine": scene.numerics.engine, "cracklab_version": cracklab.__version__, "host": platform.node(),
-            "error": error}
+            "error": error, "normal": normal or {}}
     meta_path.write_text(json.dumps(meta, indent=1))
     log(f"dx = {dx:g} m: {'stopped' if error else 'done'} after {wall:.0f} s")
     return meta
@@ -387,6 +388,54 @@ def _run_rows(res, dxs):
     return "\n".join(rows)
 
 
+def _law_setting(res):
+    """The sentence on the friction law's normal stress of the runs."""
+    normal = next(iter(res["runs"].values())).get("normal") or {}
+    if not normal:
+        return ("The friction law is the benchmark's: the strength follows the current normal traction "
+                "(no regularisation).")
+    parts = []
+    if "normal_slip_scale" in normal:
+        parts.append(f"slip scale L* = `normal_slip_scale` = {normal['normal_slip_scale']:g} m")
+    if "normal_time" in normal:
+        parts.append(f"time scale t* = `normal_time` = {normal['normal_time']:g} s")
+    return ("The friction law's strength uses the **regularised normal stress** sigma* (Prakash-Clifton, "
+            "docs/equations.md \"Regularised normal stress\"): " + " and ".join(parts) +
+            ". The comparison without it is in \"With and without the regularisation\" below.")
+
+
+def _unregularised_rows(res, dxs):
+    """Rows comparing the runs with those of ``res["unregularised"]`` (the same study without
+    the regularisation) at the spacings both have."""
+    other = res.get("unregularised")
+    if not other:
+        return ""
+    rows = []
+    for s in REF_STATIONS:
+        for dx in dxs:
+            k = f"{dx:g}"
+            if k not in other["stations"].get(s, {}):
+                continue
+            a, b = res["stations"][s][k], other["stations"][s][k]
+            rows.append(f"| {s} | {k} | {a['sim']['peak_rate']:.1f} | {b['sim']['peak_rate']:.1f} | "
+                        f"{a['ref']['peak_rate']:.1f} | {a['diff']['rupture_time']:+.3f} | "
+                        f"{b['diff']['rupture_time']:+.3f} | {100 * a['rel']['final_slip']:+.1f} | "
+                        f"{100 * b['rel']['final_slip']:+.1f} | {a['normal_rms']:.2f} | {b['normal_rms']:.2f} |")
+    acc = other.get("acceptance")
+    summary = ""
+    if acc is not None:
+        ok = sum(r["pass"] for r in acc["checks"])
+        summary = (f"\n\nWithout the regularisation the acceptance at {C.ACCEPT_DX:g} m is "
+                   f"{'PASS' if acc['pass'] else 'FAIL'} ({ok} of {len(acc['checks'])} checks hold).")
+    return ("\n## With and without the regularisation\n\nThe same study without the regularisation (the strength "
+            "follows the current normal traction), from its own output directory (`--unregularised`): peak slip "
+            "rate (m/s), rupture-time difference to MDSBI (s), final-slip difference (%) and normal-stress RMS "
+            "difference (MPa), regularised / not:\n\n"
+            "| station | dx | peak, regularised | peak, not | MDSBI | rupture time, regularised | not | "
+            "final slip %, regularised | not | normal RMS, regularised | not |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows) + summary + "\n")
+
+
 def _contour_rows(res, dxs):
     rows = []
     for dx in dxs:
@@ -421,6 +470,8 @@ and each side's face motion is recorded (`Record` fields `u_1_top`, `u_1_bottom`
 The reference is MDSBI (E. M. Dunham's spectral boundary-integral code) at 100 m
 (`shared/reference/tpv6_mdsbi`): five on-fault stations, each side's face displacement
 and velocity and the traction, and the rupture-time contours.
+
+{_law_setting(res)}
 
 {_verdict(res)}{errors}
 
@@ -485,7 +536,7 @@ levels:
 """ + "\n\n".join(f"![{s}]({figrel}/tpv6_{s}.png)" for s in REF_STATIONS) + f"""
 
 ![rupture time]({figrel}/tpv6_rupture_time.png)
-
+{_unregularised_rows(res, dxs)}
 """
     notes = Path(notes_path or HERE / "discussion.md")
     if notes.exists():
@@ -523,6 +574,14 @@ def page_numbers(res, dxs):
         d[f"pk_{key}_ref"] = f"{c['ref']['peak_rate']:.1f}"
         d[f"nmin_{key}_ref"] = f"{c['normal_range']['ref'][0]:.0f}"
         d[f"nmax_{key}_ref"] = f"{c['normal_range']['ref'][1]:.0f}"
+    other = res.get("unregularised") or {"stations": {}}
+    for s, by in other["stations"].items():
+        for k, c in by.items():
+            key = f"{s.replace('-', 'm')}_{k}"
+            d[f"upk_{key}"] = f"{c['sim']['peak_rate']:.1f}"
+            d[f"udrt_{key}"] = f"{c['diff']['rupture_time']:+.2f}"
+            d[f"uslip_{key}"] = f"{100 * c['rel']['final_slip']:+.1f} %"
+            d[f"unrms_{key}"] = f"{c['normal_rms']:.1f}"
     for dx in dxs:
         m = res["runs"][f"{dx:g}"]
         d[f"wall_{dx:g}"] = f"{m['wall_s'] / 60:.0f}"
@@ -570,7 +629,15 @@ def main(argv=None) -> int:
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
     p.add_argument("--page", default=None, help="page to write (default docs/tpv6.md)")
     p.add_argument("--reference", default=None, help="directory of the MDSBI files")
+    p.add_argument("--normal-slip-scale", type=float, default=None,
+                   help="the law's normal_slip_scale L* (m): regularised normal stress (Prakash-Clifton)")
+    p.add_argument("--normal-time", type=float, default=None,
+                   help="the law's normal_time t* (s): regularised normal stress (Prakash-Clifton)")
+    p.add_argument("--unregularised", default=None,
+                   help="output directory of the same study without the regularisation, compared on the page")
     args = p.parse_args(argv)
+    normal = {k: v for k, v in (("normal_slip_scale", args.normal_slip_scale), ("normal_time", args.normal_time))
+              if v is not None}
 
     out = Path(args.out)
     if args.quick:
@@ -582,9 +649,11 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
         for dx in dxs:
-            run_one(dx, t_end, out, force=args.force)
+            run_one(dx, t_end, out, force=args.force, normal=normal)
     res = analyse(out, dxs, args.reference)
     res["contours"] = {f"{dx:g}": contour_offsets(out, dx, args.reference) for dx in dxs}
+    if args.unregularised:
+        res["unregularised"] = json.loads((Path(args.unregularised) / "tpv6_results.json").read_text())
     (out / "tpv6_results.json").write_text(json.dumps(res, indent=1))
     report(res, dxs)
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))

@@ -90,3 +90,15 @@ def test_a_coarse_run_changes_the_normal_stress_and_moves_the_faces_unequally():
     top, bottom = float(h.u_1_top[-1]), float(h.u_1_bottom[-1])
     assert top > 0 > bottom
     assert 2.0 < top / -bottom < 4.5
+
+
+def test_materials_replace_the_pair():
+    from cracklab import InputError, Material
+    from cracklab.scenes import TPV6_FAR, TPV6_NEAR, tpv6
+
+    soft = Material(mu=TPV6_FAR.mu * 0.9, cs=TPV6_FAR.cs, nu=0.25)
+    sc = tpv6(dx=800.0, t_end=1.0, materials=(soft, TPV6_NEAR))
+    assert sc.materials == (soft, TPV6_NEAR)
+    assert tpv6(dx=800.0, t_end=1.0).materials == (TPV6_FAR, TPV6_NEAR)
+    with pytest.raises(InputError, match="^materials: must be"):
+        tpv6(dx=800.0, t_end=1.0, materials=(soft,))

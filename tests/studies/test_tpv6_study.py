@@ -181,3 +181,30 @@ def test_verdict_without_the_100_m_run_is_not_checked():
     res["stations"]["faultst120dp075"]["100"] = bad
     res["acceptance"] = C.check_acceptance(res["stations"])
     assert R.verdict_status(res) == ("FAIL", 1) and "faultst120dp075" in R._verdict(res)
+
+
+def test_the_page_names_the_law_setting_and_compares_the_unregularised_runs():
+    R = _load("run")
+    ref, _ = reference()
+    reg = C.compare_station(simulation(t_r=5.06), ref)
+    unreg = C.compare_station(simulation(t_r=5.06, slip_factor=1.5), ref)
+    res = {"runs": {"100": {"error": None, "normal": {"normal_slip_scale": 0.1}}},
+           "stations": {s: {"100": reg} for s in R.REF_STATIONS}}
+    assert "`normal_slip_scale` = 0.1 m" in R._law_setting(res)
+    assert R._unregularised_rows(res, [100.0]) == ""
+    res["unregularised"] = {"stations": {s: {"100": unreg} for s in R.REF_STATIONS},
+                            "acceptance": C.check_acceptance({s: {"100": unreg} for s in R.REF_STATIONS})}
+    text = R._unregularised_rows(res, [100.0])
+    row = [line for line in text.splitlines() if line.startswith("| faultst120dp075 | 100 |")][0]
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert float(cells[3]) == pytest.approx(1.5 * float(cells[2]), rel=1e-2)     # the peaks, 1.5 times apart
+    assert cells[8] == "+50.0"                                                  # final slip, unregularised
+    assert "Without the regularisation the acceptance at 100 m is FAIL" in text
+    assert "no regularisation" in R._law_setting({"runs": {"100": {"normal": {}}}})
+
+
+def test_the_scene_takes_the_regularisation():
+    S = _load("scene")
+    sc = S.build_scene(400.0, t_end=1.0, normal={"normal_slip_scale": 0.1, "normal_time": 0.05})
+    assert (sc.law.normal_slip_scale, sc.law.normal_time, sc.law.sigma_n) == (0.1, 0.05, None)
+    assert S.build_scene(400.0, t_end=1.0).law.normal_slip_scale is None
