@@ -588,6 +588,7 @@ def page_numbers(res, dxs):
         d[f"step_{dx:g}"] = f"{m['s_per_step']:.2f}"
         d[f"nsteps_{dx:g}"] = f"{m['nsteps']}"
         d[f"setup_{dx:g}"] = f"{m['setup_s'] / 60:.0f}"
+        d[f"setups_{dx:g}"] = f"{m['setup_s']:.0f}"
         d[f"stepping_{dx:g}"] = f"{(m['wall_s'] - m['setup_s']) / 60:.1f}"
         c = res["contours"][f"{dx:g}"]
         d[f"cmed_{dx:g}"] = f"{c['median_abs']:.2f}"
