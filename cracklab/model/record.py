@@ -22,9 +22,11 @@ def state_fields() -> tuple:
 class Record:
     """Grid ``fields`` every ``every`` steps or at ``times`` (optionally on ``region``,
     {"x1": (lo, hi), "x3": (lo, hi)} in coordinates), and every step at ``stations``
-    {name: (x1, x3)}. With neither ``every`` nor ``times``, about 20 snapshots are kept."""
+    {name: (x1, x3)}. With neither ``every`` nor ``times``, about 20 snapshots are kept.
+    ``fields`` None (the default): the slip of every component the scene activates
+    (delta_2 in mode I), resolved by the Scene."""
 
-    fields: tuple = ("delta_2",)
+    fields: tuple | None = None
     every: int | None = None
     times: tuple | None = None
     region: dict | None = None
@@ -32,6 +34,9 @@ class Record:
 
     def __post_init__(self):
         check_fields_nesting(self, "record")
+        if self.fields is None:
+            self._check_rest()
+            return
         if isinstance(self.fields, str):
             object.__setattr__(self, "fields", (self.fields,))
         if not isinstance(self.fields, (list, tuple, np.ndarray)):
@@ -43,6 +48,9 @@ class Record:
             if not isinstance(f, str) or (f not in FIELDS and f not in state):
                 raise InputError("record.fields", f"unknown field {f!r}; accepted: {', '.join(FIELDS)}, "
                                                   f"or a state variable of the law ({', '.join(state)})")
+        self._check_rest()
+
+    def _check_rest(self):
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")
