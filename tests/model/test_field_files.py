@@ -168,16 +168,28 @@ def test_wrong_shape(tmp_path):
     assert "field shape must be (n1, n3) = (16, 8), got (8, 16)" in msg
 
 
-def test_wrong_coordinates(tmp_path):
-    """The same shape on another cell (L1 = 4) or shifted by half a cell is refused."""
+def _save(ds, path):
+    if path.suffix == ".zarr":
+        ds.to_zarr(path, consolidated=False)
+    else:
+        ds.to_netcdf(path)
+
+
+@pytest.mark.parametrize("ext", ["nc", "zarr"])
+def test_wrong_coordinates(tmp_path, ext):
+    """The same shape on another cell (L1 = 4) or shifted by half a cell is refused, from a
+    netCDF file and from a Zarr store alike."""
     for name, x1 in (("wide", np.arange(16) * 0.25), ("shifted", GRID.x1 + 0.5 * GRID.dx1)):
-        field_dataset(x1=x1).to_netcdf(tmp_path / f"{name}.nc")
-        msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "{name}.nc", var = "tau_c" }}')), "law.tau_c")
-        assert f"the x1 coordinate of 'tau_c' in '{name}.nc' must be the grid's nodes x1 = 0, 0.125, ..., 1.875" \
-               in msg and "it differs at index" in msg, msg
-    field_dataset(x3=GRID.x3 * 2).to_netcdf(tmp_path / "x3.nc")
-    msg = refused(write(tmp_path, toml('tau_c = { file = "x3.nc", var = "tau_c" }')), "law.tau_c")
+        _save(field_dataset(x1=x1), tmp_path / f"{name}.{ext}")
+        msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "{name}.{ext}", var = "tau_c" }}')), "law.tau_c")
+        assert f"the x1 coordinate of 'tau_c' in '{name}.{ext}' must be the grid's nodes x1 = 0, 0.125, ..., " \
+               f"1.875" in msg and "it differs at index" in msg, msg
+    _save(field_dataset(x3=GRID.x3 * 2), tmp_path / f"x3.{ext}")
+    msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "x3.{ext}", var = "tau_c" }}')), "law.tau_c")
     assert "the x3 coordinate" in msg and "differs at index 1: 0.25 instead of 0.125" in msg
+    xr.Dataset({"tau_c": (("x1", "x3"), TAU_C)}).pipe(_save, tmp_path / f"bare.{ext}")     # no coordinates
+    msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "bare.{ext}", var = "tau_c" }}')), "law.tau_c")
+    assert "has no x1 coordinate" in msg
 
 
 def test_wrong_dims_and_no_coordinates(tmp_path):
