@@ -215,3 +215,25 @@ def test_a_sweep_whose_workers_do_not_fit_is_refused(tmp_path):
     # without --workers the cluster gets as many as fit: here one, which fits in 600 MB
     res = cli("sweep", study, "--dry-run", env={budget.LIMIT_ENV: "600MB"})
     assert res.returncode == 0 and "1 worker process:" in res.stdout, res.stdout
+
+
+def test_the_member_checks_come_before_any_cluster(tmp_path, monkeypatch):
+    """A bad scene path or a text for a number is refused in this process: no dask cluster
+    or client is made, and no store written (the cluster is made to fail if it is tried)."""
+    import distributed
+
+    from cracklab import ensemble as E
+    from cracklab.errors import InputError
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a dask cluster was started before the members were checked")
+
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    monkeypatch.setattr(distributed, "Client", no_cluster)
+    base = E.Builder("asperity_row", n1=32, n3=16, t_end=0.5)
+    out = tmp_path / "ens.zarr"
+    for sweep, field in (({"law.tauc": [1.0, 2.0]}, "sweep.law.tauc"), ({"diameter": ["0.1"]}, "sweep.diameter")):
+        with pytest.raises(InputError) as err:
+            E.run(base, E.Sweep(product=sweep), out, workers=2, progress=False)
+        assert err.value.field == field, str(err.value)
+    assert not out.exists()
