@@ -95,7 +95,10 @@ def study_toml(path, *, name="manners", t_end=0.05, sweep="[sweep]\np = [1.0, 1.
 
 # ---------------------------------------------------------------------------- help and -o
 def test_every_command_takes_h_and_o():
-    for command in ("run", "sweep", "plot", "export", "verify", "bench", "demo"):
+    from cracklab.cli import main
+
+    assert set(main.commands) == {"run", "sweep", "plot", "export", "summary", "verify", "bench", "demo"}
+    for command in main.commands:
         res = cli(command, "-h")
         assert res.returncode == 0 and "Usage:" in res.stdout and "-h, --help" in res.stdout, (command, res.stderr)
         if command != "verify":                 # verify writes nothing
@@ -321,6 +324,31 @@ def test_plot_member_by_and_time_errors(tmp_path, ensemble):
         cli("plot", run, "--kind", "snapshot", "--field", "v_3"))
     ok = cli("plot", run, "--kind", "snapshot", "--time", "0.02", "-o", tmp_path / "snap.png")
     assert ok.returncode == 0 and (tmp_path / "snap.png").stat().st_size > 0
+
+
+def test_summary_prints_the_table_or_writes_csv(tmp_path, ensemble):
+    """`cracklab summary` as a process: one row per member (the failed ones with their
+    status and error), the parameters first; -o writes the same table as CSV."""
+    import pandas as pd
+
+    store, ids = ensemble
+    res = cli("summary", store)
+    assert res.returncode == 0 and res.stderr == "", res.stderr
+    lines = res.stdout.splitlines()
+    header = lines[0].split()
+    assert header.index("p") < header.index("status") < header.index("crack_length"), lines[0]
+    rows = {ln.split()[0]: ln for ln in lines[1:] if ln.strip() and ln.split()[0] in ids.values()}
+    assert len(rows) == 3 and "failed" in rows[ids["build"]] and "failed" in rows[ids["blowup"]]
+    assert "complete" in rows[ids["ok"]]
+    csv = tmp_path / "t.csv"
+    res = cli("summary", store, "-o", csv)
+    assert res.returncode == 0 and res.stdout.strip() == f"cracklab: wrote {csv} (4 rows)", res.stdout
+    table = pd.read_csv(csv, index_col="member")
+    assert len(table) == 4 and set(table.loc[list(ids.values()), "status"]) == {"complete", "failed"}
+    assert table.loc[ids["ok"], "crack_length"] > 0 and np.isnan(table.loc[ids["build"], "crack_length"])
+    assert table.loc[ids["build"], "error"].startswith("InputError: beta")
+    line = one_error_line(cli("summary", tmp_path))
+    assert line.startswith("Error: store:"), line
 
 
 # ---------------------------------------------------------------------------- failed and unfinished results
