@@ -393,6 +393,24 @@ def test_plot_and_export_of_an_unfinished_run_show_what_exists(tmp_path, monkeyp
     assert "is unfinished (status running): 75 of 97 snapshots written, checkpoint after step 200" in res.stderr
     written = {p.name for p in (tmp_path / "figs").iterdir()}
     assert {"delta_2.png", "rupture_time.png", "crack_length.png", "delta_2.gif"} <= written
+    # --kind snapshot draws the last complete snapshot (the 75th), not an empty frame of the last time
+    res = cli("plot", store, "--kind", "snapshot", "-o", tmp_path / "snap.png")
+    assert res.returncode == 0 and "is unfinished" in res.stderr, res.stderr
+    from PIL import Image
+
+    from cracklab import plots as P
+
+    P.snapshot(full.isel(t=slice(0, 75)), "delta_2", path=tmp_path / "expected.png")
+    P.snapshot(full, "delta_2", path=tmp_path / "last.png")                 # the run's last time
+    P.snapshot(full.where(full.t < 0), "delta_2", path=tmp_path / "empty.png")   # an empty (all-NaN) frame
+    drawn, expected, last, empty = (np.asarray(Image.open(tmp_path / n).convert("L"), dtype=float)
+                                    for n in ("snap.png", "expected.png", "last.png", "empty.png"))
+    assert drawn.shape == expected.shape
+
+    def differ(a, b):
+        return np.mean(np.abs(a - b) > 8)          # the fraction of pixels that differ
+    assert differ(drawn, expected) < 0.002         # the same figure (measured: 0)
+    assert differ(last, expected) > 0.005 and differ(empty, expected) > 0.1      # (measured: 0.010, 0.42)
     nc = tmp_path / "u.nc"
     res = cli("export", store, "-o", nc)
     assert res.returncode == 0 and "exported 75 snapshots" in res.stderr, res.stderr
