@@ -221,3 +221,37 @@ def test_plane_snapshots_are_lines_and_nan_fields_do_not_warn(tmp_path):
         unfinished = _si_run(nan=True)           # snapshots not written yet: all NaN
         plt.close(P.snapshot(unfinished))
         P.animate(unfinished, tmp_path / "nan.gif")
+
+
+def test_a_3d_snapshot_and_animation_carry_units_and_fit_the_figure(tmp_path):
+    import matplotlib.pyplot as plt
+
+    ds = _si_run()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = P.snapshot(ds, t=0.5)
+    ax, bar = fig.axes
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("distance along x1 [m]", "distance along x3 [m]")
+    assert bar.get_ylabel() == "opening [m]" and ax.get_title() == "opening at t = 0.5"
+    _assert_nothing_clipped(fig)
+    plt.close(fig)
+    fig = P.snapshot(_si_run(n3=1))
+    _assert_nothing_clipped(fig)
+    plt.close(fig)
+
+
+def test_the_toughness_background_of_a_real_run_spans_its_own_range(run_store):
+    """The asperity run's tau_c is 1 outside the asperities and 3 (the contrast) inside:
+    the grey background and its colour bar span exactly that."""
+    import matplotlib.pyplot as plt
+
+    ds = xr.open_zarr(run_store, consolidated=False)
+    tau_c = cracklab.scene_of(ds).law.tau_c
+    lo, hi = float(tau_c.min()), float(tau_c.max())
+    assert (lo, hi) == (1.0, 3.0)
+    fig = P.rupture_contours(ds)
+    mesh = fig.axes[0].collections[0]
+    assert (mesh.norm.vmin, mesh.norm.vmax) == (lo, hi)
+    bar = next(a for a in fig.axes[1:] if a.get_ylabel().startswith("tau_c"))
+    assert bar.get_ylim() == (lo, hi), bar.get_ylim()
+    plt.close(fig)
