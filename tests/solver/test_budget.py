@@ -157,11 +157,15 @@ def test_dry_runs_print_the_estimate_steps_and_time(tmp_path):
     res = cli("run", toml, "--dry-run", env={budget.LIMIT_ENV: "16GB"})
     assert res.returncode == 1
     assert "steps     16384 of dt" in res.stdout and "does NOT fit" in res.stdout and "not calibrated" in res.stdout
+    big = budget.run_memory(cracklab.Scene.from_toml(BIG))
+    assert f"memory    {big.describe()}; 16 GB set by {budget.LIMIT_ENV}=16GB: does NOT fit" in res.stdout
     small = tmp_path / "small.toml"
     small.write_text(BIG.replace("8192", "32"))
     res = cli("run", small, "--dry-run", "-o", tmp_path / "s.zarr")
     assert res.returncode == 0, res.stderr
     assert "steps     64 of dt = 0.01562" in res.stdout and ": fits" in res.stdout
+    est = budget.run_memory(cracklab.Scene.from_toml(small))
+    assert f"memory    {est.describe()}; " in res.stdout, res.stdout      # the estimate, then the memory available
     assert "run time  about " in res.stdout and "ms per step over 12 timed steps" in res.stdout
     assert not (tmp_path / "s.zarr").exists()
     study = tmp_path / "study.toml"
@@ -170,6 +174,7 @@ def test_dry_runs_print_the_estimate_steps_and_time(tmp_path):
     res = cli("sweep", study, "--dry-run", "--workers", "2")
     assert res.returncode == 0, res.stderr
     assert "members   3" in res.stdout and "steps     32 per member" in res.stdout
+    assert "memory    largest member about " in res.stdout and "available on this machine: fits" in res.stdout
     assert "2 worker processes" in res.stdout and "run time  about" in res.stdout and ": fits" in res.stdout
 
 
