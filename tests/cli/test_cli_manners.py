@@ -473,3 +473,49 @@ def test_export_of_a_large_unfinished_store_stays_in_bounded_memory(tmp_path, bi
         assert ds["delta_2"].shape == (100, 1024, 1024)
         x = np.linspace(0.0, 1.0, 1024)
         np.testing.assert_allclose(ds["delta_2"][99], 0.1 * np.add.outer(x, x), rtol=1e-12)
+
+
+def test_an_unfinished_member_is_named_and_shown_up_to_what_it_wrote(tmp_path, monkeypatch):
+    """A sweep stopped (as by a kill) during its second member: the figures of the whole
+    ensemble show the complete one and name the other, the member's own figures and export
+    say it is unfinished and hold only its written snapshots, and the ensemble export
+    leaves it out with a note."""
+    from cracklab import ensemble as E
+    from tests.interrupt import SIM
+
+    real, calls = SIM.Recorder.__call__, []
+
+    def stopped(self, state):
+        real(self, state)
+        if state.n == 0:
+            calls.append(1)
+        if len(calls) == 2 and state.n == 300:
+            raise KeyboardInterrupt
+    monkeypatch.setattr(SIM.Recorder, "__call__", stopped)
+    store = tmp_path / "ens.zarr"
+    base = E.Builder("elliptical_crack", n=32, a=0.25, b=0.2, t_end=6.0)
+    with pytest.raises(KeyboardInterrupt):
+        E.run(base, E.Sweep(product={"p": [1.0, 1.2]}, base={"record.every": 4}), store, scheduler="synchronous",
+              progress=False)
+    monkeypatch.setattr(SIM.Recorder, "__call__", real)
+    status = E.member_status(store)
+    assert [s["status"] for s in status] == ["complete", "running"]
+    done, left = status[0]["id"], status[1]["id"]
+
+    res = cli("plot", store, "-o", tmp_path / "figs")
+    assert res.returncode == 0, res.stderr
+    assert f"1 unfinished of 2 members ({left}); the figures show 1 member\n" in res.stderr, res.stderr
+    assert (tmp_path / "figs" / "crack_length.png").exists()
+    res = cli("plot", store, "--member", "1", "--kind", "snapshot", "-o", tmp_path / "m.png")
+    assert res.returncode == 0 and (tmp_path / "m.png").exists(), res.stderr
+    note = re.search(rf"member {left} is unfinished \(status running\): (\d+) of 97 snapshots written", res.stderr)
+    assert note, res.stderr
+    written = int(note.group(1))
+    assert 0 < written < 97
+    res = cli("export", store, "--member", left, "-o", tmp_path / "m.nc")
+    assert res.returncode == 0 and f"exported {written} snapshots" in res.stderr, res.stderr
+    ds = xr.open_dataset(tmp_path / "m.nc")
+    assert ds.sizes["t"] == written and np.isfinite(ds.delta_2.values).all()
+    res = cli("export", store, "-o", tmp_path / "all.nc")
+    assert res.returncode == 0 and f"1 member not complete left out: {left}" in res.stderr, res.stderr
+    assert list(xr.open_dataset(tmp_path / "all.nc").member.values) == [done]
