@@ -255,3 +255,28 @@ def test_the_toughness_background_of_a_real_run_spans_its_own_range(run_store):
     bar = next(a for a in fig.axes[1:] if a.get_ylabel().startswith("tau_c"))
     assert bar.get_ylim() == (lo, hi), bar.get_ylim()
     plt.close(fig)
+
+
+def test_figures_of_an_ensemble_padded_with_nan_do_not_warn(tmp_path):
+    """Members recorded every 2 and every 4 steps: open_ensemble pads the sparser ones with
+    NaN snapshots; every figure of it, and of those members, draws without a warning (no
+    "All-NaN slice") and the padded member's snapshot is its own last one."""
+    import matplotlib.pyplot as plt
+
+    store = tmp_path / "pad.zarr"
+    res = E.run(E.Builder("asperity_row", n1=32, n3=16, t_end=22 * 0.03125, diameter=0.25),      # 22 steps
+                E.Sweep(product={"contrast": [1.5, 3.0], "record.every": [2, 4]}), store,
+                scheduler="synchronous", progress=False)
+    assert res.ok, res.summary()
+    ens = E.open_ensemble(store)
+    sparse = int(np.nonzero(ens.record_every.values == 4)[0][0])
+    assert np.isnan(ens.delta_2.isel(member=sparse).values).any()          # the padding is there
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        paths = P.summary_figures(ens, tmp_path / "figs", gif_member=sparse)
+        fig = P.snapshot(ens, member=sparse)
+    assert len(paths) == 3 and all(p.stat().st_size > 2000 for p in paths)
+    own = E.open_member(store, str(ens.member.values[sparse]))
+    assert float(own.t[-1]) < float(ens.t[-1])                             # it ends before the others
+    assert fig.axes[0].get_title().endswith(f" at t = {float(own.t[-1]):.3g}"), fig.axes[0].get_title()
+    plt.close(fig)
