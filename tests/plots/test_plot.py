@@ -223,7 +223,7 @@ def test_plane_snapshots_are_lines_and_nan_fields_do_not_warn(tmp_path):
         P.animate(unfinished, tmp_path / "nan.gif")
 
 
-def test_a_3d_snapshot_and_animation_carry_units_and_fit_the_figure(tmp_path):
+def test_a_3d_snapshot_carries_units_and_fits_the_figure(tmp_path):
     import matplotlib.pyplot as plt
 
     ds = _si_run()
