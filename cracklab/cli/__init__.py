@@ -716,8 +716,10 @@ BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3"
               help="Nodes along x1 (a fast FFT size: products of 2, 3, 5 and 7).")
 @click.option("--n3", type=click.IntRange(min=1), default=256, show_default=True,
               help="Nodes along x3; 1: the plane problem.")
-@click.option("--mode", type=click.Choice(["I", "II", "III", "shear"]), default=None,
-              help="Fracture mode of the load  [default: I, shear with a friction --law]")
+@click.option("--mode", type=click.Choice(["I", "II", "III", "shear", "mixed"]), default=None,
+              help="Fracture mode of the load; mixed: all three components (the opening and both "
+                   "slips, as a law that follows the normal traction runs)  [default: I, shear with a "
+                   "friction --law]")
 @click.option("--steps", "nsteps", type=click.IntRange(min=2), default=200, show_default=True,
               help="Steps of the run; the second half is timed.")
 @click.option("--engine", type=click.Choice(["exponential", "direct", "auto"]), default="exponential",

@@ -26,7 +26,7 @@ from ..solver.stability import beta_max
 from ..solver.stepper import Stepper
 from ..errors import InputError
 
-MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3)}
+MODES = {"I": (2,), "II": (1,), "III": (3,), "shear": (1, 3), "mixed": (1, 2, 3)}
 LAWS = ("traction_free", "slip_weakening", "rate_state")
 
 
@@ -56,6 +56,8 @@ def _bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, fre
         raise InputError("law", f"must be one of {', '.join(LAWS)}, got {law!r}")
     if law != "traction_free" and mode == "I":
         raise InputError("mode", f"the {law} bench is a shear rupture: mode II, III or shear, got I")
+    if law != "traction_free" and mode == "mixed":
+        raise InputError("mode", f"the {law} bench is a shear rupture: mode II, III or shear, got mixed")
     if law != "traction_free" and free_surface:
         raise InputError("free_surface", f"the {law} bench is a whole-space rupture; --free-surface goes with "
                                          f"the traction_free bench")

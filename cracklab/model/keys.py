@@ -89,7 +89,7 @@ SECTION_KEYS = {
     },
     "record": {
         "fields": Key("-", f"names among {', '.join(FIELDS)}, or a state variable of the law; computed by "
-                      "the scene", "grid fields to record ([] for none)", (["speed"],)),
+                      "the scene", "grid fields to record ([] for none; absent: the slip of every active component, delta_2 in mode I)", (["speed"],)),
         "every": Key("-", "an integer >= 1 (at most 1e7 snapshots)", "record every this many steps "
                      "(default: about 20 snapshots)", (0, 2.5)),
         "times": Key("time", "in [0, t_end]; not with every", "record at these times", ([-1.0], ["a"])),

@@ -36,9 +36,10 @@ class Record:
     {"x1": (lo, hi), "x3": (lo, hi)} in coordinates), and every step at ``stations``
     {name: (x1, x3)} (the slip, slip rate and traction components and the strength, and the
     faces' fields among ``fields``: ``FACE_FIELDS``). With neither ``every`` nor ``times``,
-    about 20 snapshots are kept."""
+    about 20 snapshots are kept. ``fields`` None (the default): the slip of every component
+    the scene activates (delta_2 in mode I), resolved by the Scene."""
 
-    fields: tuple = ("delta_2",)
+    fields: tuple | None = None
     every: int | None = None
     times: tuple | None = None
     region: dict | None = None
@@ -46,6 +47,9 @@ class Record:
 
     def __post_init__(self):
         check_fields_nesting(self, "record")
+        if self.fields is None:
+            self._check_rest()
+            return
         if isinstance(self.fields, str):
             object.__setattr__(self, "fields", (self.fields,))
         if not isinstance(self.fields, (list, tuple, np.ndarray)):
@@ -59,6 +63,9 @@ class Record:
                                                   f"a face's motion on a bimaterial interface (u_1_top, v_1_top, "
                                                   f"... u_3_bottom, v_3_bottom) or a state variable of the law "
                                                   f"({', '.join(state)})")
+        self._check_rest()
+
+    def _check_rest(self):
         if self.every is not None:
             if isinstance(self.every, bool) or not isinstance(self.every, (int, np.integer)) or self.every < 1:
                 raise InputError("record.every", f"must be an integer >= 1, got {self.every!r}")

@@ -158,6 +158,9 @@ class Scene:
                 raise InputError(f"loading.tau0_{c}", f"must be loaded: law {self.law.kind!r} without sigma_n "
                                                       f"follows the normal traction (tau0_{c} < 0: compression), "
                                                       f"or give law.sigma_n")
+        if self.record.fields is None:      # the default: the slip of every active component
+            object.__setattr__(self, "record", dataclasses.replace(
+                self.record, fields=tuple(f"delta_{c}" for c in active)))
         self.law.check_scene(self)
         bmax = self.beta_max
         if self.beta is None:  # the default: 0.5, or the stable limit where that is lower

@@ -140,3 +140,19 @@ def test_bench_free_surface():
     res = CliRunner().invoke(main, ["bench", "--n1", "32", "--n3", "1", "--steps", "10", "--free-surface"])
     assert res.exit_code != 0 and "grid.free_surface" in res.output
     assert "--free-surface" in CliRunner().invoke(main, ["bench", "--help"]).output
+
+
+def test_bench_mixed_mode_runs_all_three_components():
+    """--mode mixed: the opening and both slips, the one-material step to set a bimaterial
+    one against (the faces always carry the normal channel); 4 + 4 transforms per step."""
+    from cracklab.cli.bench import bench_scene, run
+
+    assert bench_scene(16, 16, "mixed", 10).components == (1, 2, 3)
+    one = run(16, 16, "mixed", 10, engine="exponential")
+    assert set(one["terms"]) == {"I", "II", "III"} and one["formulation"] == "product"
+    assert one["transforms_per_step"] == 12.0
+    two = run(16, 16, "mixed", 10, engine="exponential", bimaterial=True)
+    assert {k.split(".")[1] for k in two["terms"]} == {"L", "N", "LN", "NL", "T"}
+    res = CliRunner().invoke(main, ["bench", "--n1", "16", "--n3", "16", "--steps", "10", "--law", "slip_weakening",
+                                    "--mode", "mixed"])
+    assert res.exit_code != 0 and "mode" in res.output and "mixed" in res.output

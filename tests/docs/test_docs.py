@@ -265,3 +265,82 @@ def test_modal_scheme_tables_match_the_study():
     tables = ["\n".join(t) for t in markdown_tables((DOCS / "verification.md").read_text())]
     assert study.markdown(pfs, study.fmt_pf) in tables
     assert study.markdown(rates, study.fmt_growth) in tables
+
+
+# ----------------------------------------------------------------------------- pages against the code
+def test_periodic_crack_example_prints_what_the_page_says(tmp_path, monkeypatch):
+    """getting_started's plane periodic-crack example, run alone: the slip it prints is the
+    one the paragraph above it quotes (0.5773 against 0.5722), within 1 % of exact."""
+    monkeypatch.chdir(tmp_path)
+    (code,) = [b for b in blocks("docs/getting_started.md", "python") if "periodic_row_opening" in b]
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code, "periodic-crack example", "exec"), {"__name__": "__docs__"})
+    m = re.fullmatch(r"1 centre slip (\d\.\d{4}), exact (\d\.\d{4})", out.getvalue().strip())
+    assert m, out.getvalue()
+    slip, exact = m.groups()
+    text = (ROOT / "docs" / "getting_started.md").read_text()
+    assert f"({slip} against {exact})" in text, (slip, exact)
+    assert abs(float(slip) / float(exact) - 1) < 0.01
+
+
+def test_ensembles_quick_start_runs_alone(tmp_path, monkeypatch):
+    """docs/ensembles.md's quick start: its study is the demo's study file, and its Python
+    block runs on its own in a fresh namespace (its imports suffice) on that study with
+    smaller grids, printing the table of diameter, contrast and final crack length."""
+    import functools
+
+    from cracklab import ensemble
+
+    text = (DOCS / "ensembles.md").read_text()
+    quick = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    study = [body for tag, body in FENCE.findall(quick) if tag == "toml"][0]
+    assert tomllib.loads(study) == tomllib.loads((ROOT / "studies" / "asperity_ensemble" / "study.toml").read_text())
+    code = [body for tag, body in FENCE.findall(quick) if tag == "python"][0]
+    small = study.replace("n1 = 128", "n1 = 32").replace("n3 = 64", "n3 = 16").replace("t_end = 4.0", "t_end = 0.5")
+    small = small.replace("record.every = 16", "record.every = 8")
+    assert small.count("= 32") == 1 and "t_end = 0.5" in small
+    (tmp_path / "studies" / "asperity_ensemble").mkdir(parents=True)
+    (tmp_path / "studies" / "asperity_ensemble" / "study.toml").write_text(small)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(ensemble, "run_study", functools.partial(ensemble.run_study, scheduler="synchronous",
+                                                                 progress=False))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code, "docs/ensembles.md, quick start", "exec"), {"__name__": "__docs__"})
+    lines = out.getvalue().splitlines()
+    assert lines[0].startswith("9 members: 9 ran"), lines[0]
+    header = next(line for line in lines if "crack_length" in line).split()
+    assert header[:3] == ["diameter", "contrast", "crack_length"], header
+
+
+def test_readme_says_how_to_build_and_open_the_site_and_ci_builds_it():
+    """The README's site command is bootstrap.py's, with the page bootstrap.py names; CI
+    (.ci/run) runs the suite through bootstrap.py, whose lock pins the site's tools, so the
+    site's test (tests/docs/test_site.py: -W -n) runs there, unskipped."""
+    import importlib.util
+
+    readme = (ROOT / "README.md").read_text()
+    assert "```sh\npython3 bootstrap.py docs\n```" in readme and "docs/_build/html/index.html" in readme
+    spec = importlib.util.spec_from_file_location("bootstrap", ROOT / "bootstrap.py")
+    boot = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(boot)
+    assert boot.SITE == ROOT / "docs" / "_build" / "html" and "docs" in boot.USAGE
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "bootstrap.py test" in ci
+    lock = (ROOT / "environment.lock").read_text()
+    for package in ("sphinx", "myst-parser", "sphinx-gallery"):
+        assert re.search(rf"^{package}==[\d.]+ \\", lock, flags=re.M), package
+    site_test = (ROOT / "tests" / "docs" / "test_site.py").read_text()
+    assert 'if not os.environ.get("CI"):' in site_test and '"-W"' in site_test and '"-n"' in site_test
+
+
+def test_the_demo_times_agree_between_readme_and_getting_started():
+    """The demo's run time is a measurement on a quiet host, which no test can repeat; the
+    two pages that quote it quote the same figures."""
+    readme = (ROOT / "README.md").read_text().split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    first = (ROOT / "docs" / "getting_started.md").read_text().split("## First run", 1)[1].split("\n## ", 1)[0]
+
+    def times(text):
+        return re.findall(r"about (\d+) s[^(]*\((\d+) s the first time", " ".join(text.split()))
+    assert times(readme) and times(readme) == times(first), (times(readme), times(first))

@@ -181,6 +181,7 @@ def test_plain_xarray_opens_every_store_without_warnings(store, tmp_path):
         tree = xr.open_datatree(path, engine="zarr")
         member = xr.open_zarr(path, group=f"members/{res.members[0].id}")
         run = xr.open_zarr(run_store)
+        run_tree = xr.open_datatree(run_store, engine="zarr")
     assert list(root.member.values) == [m.id for m in res.members]
     assert {"contrast", "record_every", "seed", "status", "builder"} <= set(root.coords)
     assert root.record_every.dtype == np.int64 and root.seed.dtype == np.int64
@@ -190,6 +191,7 @@ def test_plain_xarray_opens_every_store_without_warnings(store, tmp_path):
     assert tree.dataset.contrast.values[0] == 1.5
     assert member.delta_2.sizes["t"] > 1 and "scene" in member.attrs
     assert run.delta_2.sizes == {"t": run.sizes["t"], "x1": 16, "x3": 16}
+    assert run_tree.dataset.delta_2.sizes == run.delta_2.sizes
     # our own readers see what is on disk, not the consolidated copy
     assert E.open_ensemble(path).sizes["member"] == 5
     assert cracklab.output.verify.verify(path).ok and cracklab.output.verify.verify(run_store).ok

@@ -8,11 +8,9 @@ import os
 import numpy as np
 import pytest
 import xarray as xr
-from click.testing import CliRunner
 
 from cracklab import (Grid, InputError, LinearCohesive, Loading, Material, Record, Scene, scene_of, scenes,
                       simulate)
-from cracklab.cli import main
 from cracklab.model.scene_io import scene_to_toml, scenes_equal
 
 GRID = Grid(n1=16, n3=8, L1=2.0, L3=1.0)
@@ -168,16 +166,28 @@ def test_wrong_shape(tmp_path):
     assert "field shape must be (n1, n3) = (16, 8), got (8, 16)" in msg
 
 
-def test_wrong_coordinates(tmp_path):
-    """The same shape on another cell (L1 = 4) or shifted by half a cell is refused."""
+def _save(ds, path):
+    if path.suffix == ".zarr":
+        ds.to_zarr(path, consolidated=False)
+    else:
+        ds.to_netcdf(path)
+
+
+@pytest.mark.parametrize("ext", ["nc", "zarr"])
+def test_wrong_coordinates(tmp_path, ext):
+    """The same shape on another cell (L1 = 4) or shifted by half a cell is refused, from a
+    netCDF file and from a Zarr store alike."""
     for name, x1 in (("wide", np.arange(16) * 0.25), ("shifted", GRID.x1 + 0.5 * GRID.dx1)):
-        field_dataset(x1=x1).to_netcdf(tmp_path / f"{name}.nc")
-        msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "{name}.nc", var = "tau_c" }}')), "law.tau_c")
-        assert f"the x1 coordinate of 'tau_c' in '{name}.nc' must be the grid's nodes x1 = 0, 0.125, ..., 1.875" \
-               in msg and "it differs at index" in msg, msg
-    field_dataset(x3=GRID.x3 * 2).to_netcdf(tmp_path / "x3.nc")
-    msg = refused(write(tmp_path, toml('tau_c = { file = "x3.nc", var = "tau_c" }')), "law.tau_c")
+        _save(field_dataset(x1=x1), tmp_path / f"{name}.{ext}")
+        msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "{name}.{ext}", var = "tau_c" }}')), "law.tau_c")
+        assert f"the x1 coordinate of 'tau_c' in '{name}.{ext}' must be the grid's nodes x1 = 0, 0.125, ..., " \
+               f"1.875" in msg and "it differs at index" in msg, msg
+    _save(field_dataset(x3=GRID.x3 * 2), tmp_path / f"x3.{ext}")
+    msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "x3.{ext}", var = "tau_c" }}')), "law.tau_c")
     assert "the x3 coordinate" in msg and "differs at index 1: 0.25 instead of 0.125" in msg
+    xr.Dataset({"tau_c": (("x1", "x3"), TAU_C)}).pipe(_save, tmp_path / f"bare.{ext}")     # no coordinates
+    msg = refused(write(tmp_path, toml(f'tau_c = {{ file = "bare.{ext}", var = "tau_c" }}')), "law.tau_c")
+    assert "has no x1 coordinate" in msg
 
 
 def test_wrong_dims_and_no_coordinates(tmp_path):
@@ -230,19 +240,27 @@ def test_bad_values_and_a_reference_where_no_field_goes(tmp_path):
     assert "only fields" in msg and "are read from files" in msg
 
 
-def test_cli_runs_a_scene_with_file_references_from_another_directory(tmp_path, monkeypatch):
+def test_cli_runs_a_scene_with_file_references_from_another_directory(tmp_path):
+    """`cracklab run case/scene.toml` as a process started in the case's parent directory."""
+    import subprocess
+    import sys
+
     case = tmp_path / "case"
     case.mkdir()
     field_dataset().to_netcdf(case / "toughness.nc")
     write(case, toml('tau_c = { file = "toughness.nc", var = "tau_c" }'))
-    monkeypatch.chdir(tmp_path)
-    res = CliRunner().invoke(main, ["run", "case/scene.toml", "-o", "out.zarr"])
-    assert res.exit_code == 0, res.output
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "cracklab.cli", "run", *args], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=300)
+    res = run("case/scene.toml", "-o", "out.zarr")
+    assert res.returncode == 0, res.stderr
     result = xr.open_zarr(tmp_path / "out.zarr", consolidated=False)
     assert np.array_equal(scene_of(result).law.tau_c, TAU_C)      # the output carries the field itself
     write(case, toml('tau_c = { file = "toughness.nc", var = "nope" }'), "bad.toml")
-    res = CliRunner().invoke(main, ["run", "case/bad.toml", "-o", "bad.zarr"])
-    assert res.exit_code != 0 and "law.tau_c: file 'toughness.nc' has no variable 'nope'" in res.output
+    res = run("case/bad.toml", "-o", "bad.zarr")
+    assert res.returncode != 0 and "Traceback" not in res.stderr
+    assert res.stderr.strip().startswith("Error: law.tau_c: file 'toughness.nc' has no variable 'nope'"), res.stderr
     assert not (tmp_path / "bad.zarr").exists()
 
 

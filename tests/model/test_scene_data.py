@@ -352,3 +352,37 @@ def test_engine_threads_reach_the_engine_and_round_trip():
     a = cracklab.simulate(sc.replace(**short))
     b = cracklab.simulate(base.replace(numerics=Numerics(engine="exponential"), **short))
     assert np.array_equal(a["delta_2"].values, b["delta_2"].values)
+
+
+def test_the_default_record_is_the_slip_of_the_active_components(tmp_path):
+    """Without ``fields`` a scene records the slip of every component it activates:
+    the opening in mode I (as before), both slips in 3D shear, where ``delta_2`` is not
+    computed (an error when asked for explicitly); a TOML without [record] runs too."""
+    import cracklab
+    from cracklab import Record
+    from cracklab.errors import InputError
+
+    shear = cracklab.scenes.tpv3(dx=1000.0, t_end=0.05)
+    assert shear.replace(record=Record()).record.fields == ("delta_1", "delta_3")
+    assert shear.replace(record=Record(every=2)).record.every == 2
+    assert cracklab.scenes.lamb(n=32, t_end=0.1).replace(record=Record()).record.fields == ("delta_2",)
+    with pytest.raises(InputError, match="record.fields: 'delta_2' is not computed"):
+        shear.replace(record=Record(fields=("delta_2",)))
+    path = tmp_path / "shear.toml"
+    path.write_text(_without_section(shear.to_toml(), "record"))
+    loaded = cracklab.Scene.from_toml(path)
+    assert loaded.record.fields == ("delta_1", "delta_3")
+    ds = cracklab.simulate(loaded)
+    assert "delta_1" in ds and "delta_3" in ds and "delta_2" not in ds
+
+
+def _without_section(toml, name):
+    """``toml`` without its table [name] and its sub-tables [name.*]."""
+    out, skip = [], False
+    for line in toml.splitlines():
+        if line.startswith("["):
+            head = line.strip("[] ")
+            skip = head == name or head.startswith(name + ".")
+        if not skip:
+            out.append(line)
+    return "\n".join(out) + "\n"

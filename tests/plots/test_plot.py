@@ -221,3 +221,62 @@ def test_plane_snapshots_are_lines_and_nan_fields_do_not_warn(tmp_path):
         unfinished = _si_run(nan=True)           # snapshots not written yet: all NaN
         plt.close(P.snapshot(unfinished))
         P.animate(unfinished, tmp_path / "nan.gif")
+
+
+def test_a_3d_snapshot_carries_units_and_fits_the_figure(tmp_path):
+    import matplotlib.pyplot as plt
+
+    ds = _si_run()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = P.snapshot(ds, t=0.5)
+    ax, bar = fig.axes
+    assert (ax.get_xlabel(), ax.get_ylabel()) == ("distance along x1 [m]", "distance along x3 [m]")
+    assert bar.get_ylabel() == "opening [m]" and ax.get_title() == "opening at t = 0.5"
+    _assert_nothing_clipped(fig)
+    plt.close(fig)
+    fig = P.snapshot(_si_run(n3=1))
+    _assert_nothing_clipped(fig)
+    plt.close(fig)
+
+
+def test_the_toughness_background_of_a_real_run_spans_its_own_range(run_store):
+    """The asperity run's tau_c is 1 outside the asperities and 3 (the contrast) inside:
+    the grey background and its colour bar span exactly that."""
+    import matplotlib.pyplot as plt
+
+    ds = xr.open_zarr(run_store, consolidated=False)
+    tau_c = cracklab.scene_of(ds).law.tau_c
+    lo, hi = float(tau_c.min()), float(tau_c.max())
+    assert (lo, hi) == (1.0, 3.0)
+    fig = P.rupture_contours(ds)
+    mesh = fig.axes[0].collections[0]
+    assert (mesh.norm.vmin, mesh.norm.vmax) == (lo, hi)
+    bar = next(a for a in fig.axes[1:] if a.get_ylabel().startswith("tau_c"))
+    assert bar.get_ylim() == (lo, hi), bar.get_ylim()
+    plt.close(fig)
+
+
+def test_figures_of_an_ensemble_padded_with_nan_do_not_warn(tmp_path):
+    """Members recorded every 2 and every 4 steps: open_ensemble pads the sparser ones with
+    NaN snapshots; every figure of it, and of those members, draws without a warning (no
+    "All-NaN slice") and the padded member's snapshot is its own last one."""
+    import matplotlib.pyplot as plt
+
+    store = tmp_path / "pad.zarr"
+    res = E.run(E.Builder("asperity_row", n1=32, n3=16, t_end=22 * 0.03125, diameter=0.25),      # 22 steps
+                E.Sweep(product={"contrast": [1.5, 3.0], "record.every": [2, 4]}), store,
+                scheduler="synchronous", progress=False)
+    assert res.ok, res.summary()
+    ens = E.open_ensemble(store)
+    sparse = int(np.nonzero(ens.record_every.values == 4)[0][0])
+    assert np.isnan(ens.delta_2.isel(member=sparse).values).any()          # the padding is there
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        paths = P.summary_figures(ens, tmp_path / "figs", gif_member=sparse)
+        fig = P.snapshot(ens, member=sparse)
+    assert len(paths) == 3 and all(p.stat().st_size > 2000 for p in paths)
+    own = E.open_member(store, str(ens.member.values[sparse]))
+    assert float(own.t[-1]) < float(ens.t[-1])                             # it ends before the others
+    assert fig.axes[0].get_title().endswith(f" at t = {float(own.t[-1]):.3g}"), fig.axes[0].get_title()
+    plt.close(fig)

@@ -88,7 +88,7 @@ def test_the_estimate_grows_as_the_arrays_do():
 
 
 MEASURE = textwrap.dedent("""
-    import json, os, resource, sys, tempfile
+    import json, os, sys, tempfile
     import cracklab
     from cracklab import Numerics, Record
     from cracklab.solver.budget import run_memory
@@ -103,7 +103,8 @@ MEASURE = textwrap.dedent("""
     scene = cracklab.scenes.lamb(n=n, t_end=t_end, record=rec).replace(numerics=Numerics(engine=engine))
     estimate = run_memory(scene).total
     cracklab.simulate(scene, store=os.path.join(tempfile.mkdtemp(), "r.zarr"), checkpoint_every=0)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    with open("/proc/self/status") as fh:      # this process's own peak (its rusage counts the parent's too)
+        peak = next(int(line.split()[1]) * 1024 for line in fh if line.startswith("VmHWM"))
     print(json.dumps({"estimate": estimate, "used": peak - base}))
 """)
 
@@ -157,11 +158,15 @@ def test_dry_runs_print_the_estimate_steps_and_time(tmp_path):
     res = cli("run", toml, "--dry-run", env={budget.LIMIT_ENV: "16GB"})
     assert res.returncode == 1
     assert "steps     16384 of dt" in res.stdout and "does NOT fit" in res.stdout and "not calibrated" in res.stdout
+    big = budget.run_memory(cracklab.Scene.from_toml(BIG))
+    assert f"memory    {big.describe()}; 16 GB set by {budget.LIMIT_ENV}=16GB: does NOT fit" in res.stdout
     small = tmp_path / "small.toml"
     small.write_text(BIG.replace("8192", "32"))
     res = cli("run", small, "--dry-run", "-o", tmp_path / "s.zarr")
     assert res.returncode == 0, res.stderr
     assert "steps     64 of dt = 0.01562" in res.stdout and ": fits" in res.stdout
+    est = budget.run_memory(cracklab.Scene.from_toml(small))
+    assert f"memory    {est.describe()}; " in res.stdout, res.stdout      # the estimate, then the memory available
     assert "run time  about " in res.stdout and "ms per step over 12 timed steps" in res.stdout
     assert not (tmp_path / "s.zarr").exists()
     study = tmp_path / "study.toml"
@@ -170,6 +175,7 @@ def test_dry_runs_print_the_estimate_steps_and_time(tmp_path):
     res = cli("sweep", study, "--dry-run", "--workers", "2")
     assert res.returncode == 0, res.stderr
     assert "members   3" in res.stdout and "steps     32 per member" in res.stdout
+    assert "memory    largest member about " in res.stdout and "available on this machine: fits" in res.stdout
     assert "2 worker processes" in res.stdout and "run time  about" in res.stdout and ": fits" in res.stdout
 
 
@@ -215,3 +221,25 @@ def test_a_sweep_whose_workers_do_not_fit_is_refused(tmp_path):
     # without --workers the cluster gets as many as fit: here one, which fits in 600 MB
     res = cli("sweep", study, "--dry-run", env={budget.LIMIT_ENV: "600MB"})
     assert res.returncode == 0 and "1 worker process:" in res.stdout, res.stdout
+
+
+def test_the_member_checks_come_before_any_cluster(tmp_path, monkeypatch):
+    """A bad scene path or a text for a number is refused in this process: no dask cluster
+    or client is made, and no store written (the cluster is made to fail if it is tried)."""
+    import distributed
+
+    from cracklab import ensemble as E
+    from cracklab.errors import InputError
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a dask cluster was started before the members were checked")
+
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    monkeypatch.setattr(distributed, "Client", no_cluster)
+    base = E.Builder("asperity_row", n1=32, n3=16, t_end=0.5)
+    out = tmp_path / "ens.zarr"
+    for sweep, field in (({"law.tauc": [1.0, 2.0]}, "sweep.law.tauc"), ({"diameter": ["0.1"]}, "sweep.diameter")):
+        with pytest.raises(InputError) as err:
+            E.run(base, E.Sweep(product=sweep), out, workers=2, progress=False)
+        assert err.value.field == field, str(err.value)
+    assert not out.exists()
