@@ -23,6 +23,9 @@ MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before
 MAX_SNAPSHOTS = 10**7
 MIRROR_ROUNDOFF = 1e-12     # |tau0_3| on the lines of a free surface's mirror, relative to max |tau0_3|
 DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
+#: of two different materials, the stable limit is this fraction of the smaller side's
+#: (measured on the traction-free mixed-mode faces: stable at 0.9, growing from 0.97)
+BIMATERIAL_MARGIN = 0.9
 
 
 def resolve_formulation(formulation: str, components) -> str:
@@ -169,7 +172,10 @@ class Scene:
             g, mode = gamma_limit(self.formulation, active, self.grid.plane, self.material.nu)
             raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme at nu = "
                                      f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
-                                     f"q_max c_s dt = {g:.4g}, docs/stability.md), got {self.beta!r}; "
+                                     f"q_max c_s dt = {g:.4g}, docs/stability.md"
+                                     + (f"; of two materials {BIMATERIAL_MARGIN:g} of the smaller side's limit"
+                                        if self.materials[0] != self.materials[1] else "")
+                                     + f"), got {self.beta!r}; "
                                      f"without beta a scene takes min({DEFAULT_BETA}, the limit)")
         steps = self.t_end / self.dt
         if not steps <= MAX_STEPS:
@@ -285,9 +291,13 @@ class Scene:
 
     @property
     def beta_max(self) -> float:
-        """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability)."""
+        """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability);
+        of two different materials, BIMATERIAL_MARGIN times the smaller of the two sides'
+        limits (the coupled faces grew at 0.97-1.0 of it: docs/performance.md,
+        "Bimaterial interface")."""
         comps = self.components
-        return min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
+        limit = min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
+        return limit * (BIMATERIAL_MARGIN if self.materials[0] != self.materials[1] else 1.0)
 
     @property
     def dt(self) -> float:

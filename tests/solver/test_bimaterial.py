@@ -147,7 +147,9 @@ def test_free_surface_bimaterial_run_equals_the_doubled_whole_space_run():
     soft = Material(mu=0.6, cs=0.8, nu=0.3)
 
     def scene(grid, x1, x3, mk, **options):
-        return tm.shear_scene(grid, x1, x3, mk, **options).replace(materials=(tm.MAT, soft))
+        sc = tm.shear_scene(grid, x1, x3, mk, **options)
+        # within the pair's limit (Scene.beta_max: 0.9 of the smaller side's)
+        return sc.replace(materials=(tm.MAT, soft), beta=min(sc.beta, 0.45))
 
     worst, half = tm._pair(scene, ("delta_1", "delta_3", "tau_1", "tau_3"))
     assert worst < tm.TOL, worst
@@ -165,3 +167,21 @@ def test_two_materials_round_trip_through_toml_and_the_output():
     assert "[materials.bottom]" in text and "[material]" not in text
     assert scenes_equal(scene_from_toml(text), sc)
     assert scene_from_dataset(cracklab.simulate(sc)).materials == (M, bottom)
+
+
+def test_the_pair_is_held_to_a_margin_below_the_smaller_sides_limit():
+    """Scene.beta_max of two materials is BIMATERIAL_MARGIN of the smaller of the sides'
+    limits (the coupled faces grew at 0.97-1.0 of it); a beta above it is refused before
+    any work, naming the margin; one material keeps its own limit."""
+    from cracklab.model.scene import BIMATERIAL_MARGIN
+
+    g = Grid(n1=16, n3=16, L1=1.0, L3=1.0)
+    soft = Material(mu=0.6, cs=0.8, nu=0.3)
+    one = Scene(material=M, grid=g, law=TractionFree(), loading=Loading(tau0_1=1.0, tau0_3=0.5), t_end=0.1,
+                numerics=PRODUCT)
+    sides = min(one.beta_max, one.replace(material=soft).beta_max)
+    two = one.replace(materials=(M, soft), beta=None)
+    assert BIMATERIAL_MARGIN == 0.9 and two.beta_max == pytest.approx(0.9 * sides, rel=1e-12)
+    assert two.beta == pytest.approx(min(0.5, two.beta_max))
+    with pytest.raises(InputError, match=r"beta: .*of two materials 0.9 of the smaller side's limit"):
+        one.replace(materials=(M, soft), beta=0.95 * sides)
