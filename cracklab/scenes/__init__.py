@@ -154,6 +154,21 @@ TPV5_STATIONS = TPV5_REFERENCE_STATIONS + [(-75, 0), (75, 0), (-120, 0), (120, 0
 TPV5_PATCHES = ((0.0, 81.6e6), (-7500.0, 78.0e6), (7500.0, 62.0e6))
 
 
+def _surface_fault_grid(dx, domain):
+    """The half plane below a free surface of ``tpv5`` and ``tpv6``: ``domain`` = (L1, L3) in
+    m, holding the 30 km x 15 km fault with bonded plane around it."""
+    dx = check_positive("dx", dx)
+    try:
+        L1, L3 = (float(x) for x in domain)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
+    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
+    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
+             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+             f"L3 >= 15 km + dx), got {domain!r}")
+    return Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+
+
 def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
     """SCEC TPV5 (see shared/reference/tpv5_mdsbi/README.md): TPV3's fault reaching a free
     surface, with two more stress patches; SI units.
@@ -176,16 +191,8 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     beta: at most 0.09, where every station's rupture time is within 0.05 s of the
     reference at 100 m (``tpv3``'s 0.125 misses it at two stations by 0.01 s). See
     docs/tpv5.md."""
-    dx = check_positive("dx", dx)
-    try:
-        L1, L3 = (float(x) for x in domain)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
-    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
-    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
-             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
-             f"L3 >= 15 km + dx), got {domain!r}")
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    grid = _surface_fault_grid(dx, domain)
+    n1 = grid.n1
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
     xc = grid.x1[n1 // 2]
     depth = grid.x3
@@ -240,16 +247,8 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     ... to record each side's motion). beta: at most 0.125 as ``tpv3``, relative to the
     near side's c_s (it sets dt). ``materials`` = (top, bottom) replaces the pair (None:
     (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/tpv6.md."""
-    dx = check_positive("dx", dx)
-    try:
-        L1, L3 = (float(x) for x in domain)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
-    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
-    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
-             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
-             f"L3 >= 15 km + dx), got {domain!r}")
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    grid = _surface_fault_grid(dx, domain)
+    n1 = grid.n1
     xc, depth = grid.x1[n1 // 2], grid.x3
     patch = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 1500.0),
                      _tpv3_cell_fraction(depth - 7500.0, grid.dx3, 1500.0))
