@@ -198,14 +198,17 @@ def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
 def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq, ln2v0, sln2v0,
                 f0, sf0,
                 fw, sfw, Vw, sVw, Vi, sVi, law, mode, from_v, eta, bonded, has_bonded,
-                z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3):
-    """Step (v) with the state update of ``mode`` at every point; returns (evaluations,
-    Newton solves, most evaluations of one solve, the first point that failed or -1)."""
+                z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow, masked):
+    """Step (v) with the state update of ``mode`` at every point (``masked``: only where
+    ``slow`` is set, the rest done by :func:`_fast_loop`); returns (evaluations, Newton
+    solves, most evaluations of one solve, the first point that failed or -1)."""
     total = 0
     solves = 0
     most = 0
     bad = -1
     for i in range(t1.size):
+        if masked and slow[i] == 0:
+            continue
         x1 = t1[i] + g * l1[i * sl1]
         x3 = t3[i] + g * l3[i * sl3]
         T = math.sqrt(x1 * x1 + x3 * x3)
@@ -287,6 +290,67 @@ def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, d
     return total, solves, most, bad
 
 
+def _fast_loop(t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
+               correct, eta, bonded, has_bonded, z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow):
+    """The ageing law's PREDICT (``correct`` False) or CORRECT pass of :func:`_slide_loop` at
+    the points that take its most common branches: the state changes by less than 1e-4 over
+    the step (the series of :func:`_evolve`), u = V exp(psi / a) / (2 V0) > e^18 (asinh(u) =
+    ln 2u) and the first Newton step from the guess converges below 1e-3. The same
+    arithmetic in the same order, in a loop without calls or early exits, which the
+    compiler vectorises; ``slow[i]`` = 1 where another branch is needed (those points are
+    left as they are, for :func:`_slide_loop`). Returns the number of points done."""
+    tol = STEP_TOL if correct else PREDICT_TOL
+    tol2 = tol * tol
+    done = 0
+    for i in range(t1.size):
+        x1 = t1[i] + g * l1[i]
+        x3 = t3[i] + g * l3[i]
+        T = math.sqrt(x1 * x1 + x3 * x3)
+        ai = a[i]
+        A = sig[i] * ai
+        Vo = V_old[i]
+        Vg = V[i] if correct else Vo            # the Newton guess: the prediction, or V_{n-1}
+        Vs = 0.5 * (Vo + Vg) if correct else Vo  # the state's constant rate over the step
+        x = lnV[i]
+        zo = z_old[i]
+        qi = q[i]
+        s = Vs * dtL[i]
+        e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH))
+        phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
+        zn = zo * e + qi * phi
+        r = (e - 1.0) + qi * phi / zo
+        p = psi[i] + b[i] * r * (1.0 - r * (0.5 - r * THIRD))
+        lnc = p * ia[i] - ln2v0[i]
+        lnu = lnc + x
+        G = T - eta * Vg - A * (lnu + LN2)
+        damping = eta * Vg
+        inverse = 1.0 / (damping + A)
+        step = G * inverse
+        w = damping * inverse
+        a_step = abs(step)
+        W = Vg * (1.0 + step * (1.0 + step * (0.5 + step * (SIXTH + step * TWENTYFOURTH))))
+        # & rather than `and`: no branches, so that the loop vectorises
+        ok = (s < 1e-4) & (abs(r) < 1e-4) & (T > 0.0) & (A > 0.0) & (-740.0 < x) & (x < 700.0) \
+            & (lnu > 18.0) & (G != 0.0) & (a_step < 1e-3) & ((a_step < tol) | (w * step * step < tol2)) \
+            & (W >= 0.0) & (W < math.inf) & (abs(p) < math.inf) & (not (has_bonded & bonded[i * has_bonded]))
+        scale = W / T
+        w1 = scale * x1
+        w3 = scale * x3
+        slow[i] = 0 if ok else 1
+        done += 1 if ok else 0
+        V[i] = W if ok else V[i]
+        lnV[i] = x + step if ok else x
+        v1[i] = w1
+        v3[i] = w3
+        if correct:
+            z[i] = zn if ok else z[i]
+            psi[i] = p if ok else psi[i]
+            strength[i] = T - eta * W
+            o1[i] = x1 - eta * w1
+            o3[i] = x3 - eta * w3
+    return done
+
+
 _HELPERS = ("_lnsinh", "_asinh_exp", "_bounds", "_newton", "_evolve")
 _KERNEL = []
 
@@ -304,7 +368,21 @@ def _kernel():
             for name in _HELPERS:           # the pass calls them by their global names, inlined
                 g[name] = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(g[name])
             _KERNEL.append(jit(_slide_loop))
+            _KERNEL.append(jit(_fast_loop))
+            return _KERNEL[0]
     return _KERNEL[0]
+
+
+def _fast_kernel():
+    """The compiled :func:`_fast_loop` (None without numba: the scalar pass does every point)."""
+    _kernel()
+    return _KERNEL[1] if len(_KERNEL) > 1 else None
+
+
+def _full(pair, n):
+    """The (flat array, stride) ``pair`` of :func:`_flat` as an array of all ``n`` points."""
+    arr, stride = pair
+    return arr if stride else np.full(n, arr[0])
 
 
 def _flat(value, shape):
@@ -529,11 +607,27 @@ class RateState(Friction):
             out = state["work"] * 2
         else:
             out = [np.empty(shape) for _ in range(4)]
+        arrays = (z_old.ravel(), state["V_old"].ravel(), z.ravel(), state["psi"].ravel(), state["V"].ravel(),
+                  state["lnV"].ravel(), state["strength"].ravel(), *(o.ravel() for o in out))
+        fast = _fast_kernel() if law == AGEING and mode in (PREDICT, CORRECT) else None
+        done, masked = 0, False
+        if fast is not None:
+            slow = state.get("slow")
+            if slow is None or slow.size != t1.size:
+                slow = state["slow"] = np.empty(t1.size, dtype=np.int8)
+            n = t1.size
+            key = ("full", shape, dt)
+            if key not in self._cache:      # every parameter over the grid: loads the compiler vectorises
+                self._cache[key] = [_full(x, n) for x in (a, ia, b, dtL, q, ln2v0)]
+            done = int(fast(t1, t3, g, _full((l1, sl1), n), _full((l3, sl3), n), _full(sig, n), *self._cache[key],
+                            mode == CORRECT, float(eta), bonded, has_bonded, *arrays, slow))
+            masked = True
+        else:
+            slow = np.zeros(1, dtype=np.int8)
         total, solves, most, bad = _kernel()(
             t1, t3, g, l1, sl1, l3, sl3, *sig, *a, *ia, *b, *dtL, *q, *ln2v0, *f0, *fw, *Vw, *Vi, law, mode,
-            from_v, float(eta), bonded, has_bonded, z_old.ravel(), state["V_old"].ravel(), z.ravel(),
-            state["psi"].ravel(), state["V"].ravel(), state["lnV"].ravel(), state["strength"].ravel(),
-            *(o.ravel() for o in out))
+            from_v, float(eta), bonded, has_bonded, *arrays, slow, masked)
+        total, solves, most = total + done, solves + done, max(most, 1 if done else 0)
         state["newton_evaluations"] += int(total)
         state["newton_solves"] += int(solves)
         state["newton_most"] = max(state["newton_most"], int(most))

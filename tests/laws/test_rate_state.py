@@ -303,3 +303,34 @@ def test_a_resumed_run_is_the_uninterrupted_run(formulation):
     for x, y in zip(whole[20:], rest):
         np.testing.assert_array_equal(y, x)
     assert np.all(np.isfinite(whole[-1])) and whole[-1].max() > 1e-3
+
+
+def test_the_vector_pass_gives_the_scalar_pass_bit_for_bit(monkeypatch):
+    """The ageing law's fast pass (laws/rate_state._fast_loop: the common branches without
+    calls or early exits) leaves to the scalar pass only the points it cannot do, and the
+    run is the same to the bit as with the scalar pass alone (states, slip rates, Newton
+    counts), through nucleation and rupture."""
+    import hashlib
+
+    import cracklab.laws.rate_state as rs
+    from cracklab.cli.bench import bench_scene
+    from cracklab.solver.stepper import Stepper
+
+    def run():
+        stepper = Stepper(bench_scene(48, 48, "shear", 150, engine="exponential", law="rate_state"))
+        h, fast_share = hashlib.sha256(), []
+        for s in stepper:
+            for c in sorted(s.v):
+                h.update(np.ascontiguousarray(s.v[c]).tobytes())
+            if "slow" in stepper.lstate:
+                fast_share.append(1.0 - stepper.lstate["slow"].mean())
+        ls = stepper.lstate
+        for k in ("psi", "V", "lnV", "z", "strength"):
+            h.update(np.ascontiguousarray(ls[k]).tobytes())
+        return h.hexdigest(), (ls["newton_evaluations"], ls["newton_solves"], ls["newton_most"]), fast_share
+
+    fast = run()
+    assert max(fast[2]) > 0.5          # the fast pass did most points at some step
+    monkeypatch.setattr(rs, "_fast_kernel", lambda: None)
+    scalar = run()
+    assert scalar[2] == [] and fast[:2] == scalar[:2]
