@@ -128,11 +128,11 @@ def test_an_8192_squared_scene_is_refused_before_any_step(tmp_path):
     toml.write_text(BIG)
     out = tmp_path / "big.zarr"
     t0 = time.perf_counter()
-    res = cli("run", toml, "-o", out, env={budget.LIMIT_ENV: "16GB"})
+    res = cli("run", toml, "-o", out, env={budget.LIMIT_ENV: "4GB"})
     elapsed = time.perf_counter() - t0
     line = error_line(res)
     assert line.startswith("Error: memory: the run of 'big' needs about "), line
-    assert "(history " in line and ", set-up " in line and "GB is set by CRACKLAB_MEMORY_LIMIT=16GB; refused before any step" in line
+    assert "(history " in line and ", set-up " in line and "GB is set by CRACKLAB_MEMORY_LIMIT=4GB; refused before any step" in line
     total = budget.parse_bytes(line.split("needs about ")[1].split(" (")[0].replace(" ", ""))
     assert total > 40 << 30             # 33.6 M Fourier modes, 20 fitted terms each
     assert elapsed < 60, elapsed
@@ -144,7 +144,7 @@ def test_an_8192_squared_scene_is_refused_before_any_step(tmp_path):
     est = budget.run_memory(scene)
     assert 8 << 30 < est.work < 20 << 30 and est.setup > est.work, est.describe()
     with pytest.raises(MemoryBudgetError, match="refused before any step"):
-        os.environ[budget.LIMIT_ENV] = "16GB"
+        os.environ[budget.LIMIT_ENV] = "4GB"
         try:
             cracklab.simulate(scene, store=out)
         finally:
@@ -155,11 +155,11 @@ def test_an_8192_squared_scene_is_refused_before_any_step(tmp_path):
 def test_dry_runs_print_the_estimate_steps_and_time(tmp_path):
     toml = tmp_path / "big.toml"
     toml.write_text(BIG)
-    res = cli("run", toml, "--dry-run", env={budget.LIMIT_ENV: "16GB"})
+    res = cli("run", toml, "--dry-run", env={budget.LIMIT_ENV: "4GB"})
     assert res.returncode == 1
     assert "steps     16384 of dt" in res.stdout and "does NOT fit" in res.stdout and "not calibrated" in res.stdout
     big = budget.run_memory(cracklab.Scene.from_toml(BIG))
-    assert f"memory    {big.describe()}; 16 GB set by {budget.LIMIT_ENV}=16GB: does NOT fit" in res.stdout
+    assert f"memory    {big.describe()}; 4 GB set by {budget.LIMIT_ENV}=4GB: does NOT fit" in res.stdout
     small = tmp_path / "small.toml"
     small.write_text(BIG.replace("8192", "32"))
     res = cli("run", small, "--dry-run", "-o", tmp_path / "s.zarr")
