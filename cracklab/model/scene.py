@@ -140,7 +140,7 @@ class Scene:
         if self.beta is not None:
             object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
-        if self.materials[0] != self.materials[1] and self.formulation != "product":
+        if self.two_materials and self.formulation != "product":
             raise InputError("numerics.formulation", f"a pair of different materials runs the product scheme; "
                                                      f"got {self.formulation!r}")
         active = self.components
@@ -174,7 +174,7 @@ class Scene:
                                      f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
                                      f"q_max c_s dt = {g:.4g}, docs/stability.md"
                                      + (f"; of two materials {BIMATERIAL_MARGIN:g} of the smaller side's limit"
-                                        if self.materials[0] != self.materials[1] else "")
+                                        if self.two_materials else "")
                                      + f"), got {self.beta!r}; "
                                      f"without beta a scene takes min({DEFAULT_BETA}, the limit)")
         steps = self.t_end / self.dt
@@ -297,7 +297,12 @@ class Scene:
         "Bimaterial interface")."""
         comps = self.components
         limit = min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
-        return limit * (BIMATERIAL_MARGIN if self.materials[0] != self.materials[1] else 1.0)
+        return limit * (BIMATERIAL_MARGIN if self.two_materials else 1.0)
+
+    @property
+    def two_materials(self) -> bool:
+        """True when the two half spaces differ (the bimaterial interface)."""
+        return self.materials[0] != self.materials[1]
 
     @property
     def dt(self) -> float:
