@@ -76,6 +76,15 @@ def _asinh_exp(lnu):
     return math.asinh(u), u * math.sqrt(q), q
 
 
+def _grow(V, h):
+    """V e^h for |h| < 1e-2 without exp: the series to h^4 (the rest h^5 / 120 < 1e-17 for |h| <
+    1e-3) or to h^8 (h^9 / 9! < 3e-24), chosen without a branch."""
+    low = 1.0 + h * (1.0 + h * (0.5 + h * (SIXTH + h * TWENTYFOURTH)))
+    high = 1.0 + h * (1.0 + h * (0.5 + h * (SIXTH + h * (TWENTYFOURTH + h * (1.0 / 120.0 + h * (
+        1.0 / 720.0 + h * (1.0 / 5040.0 + h * (1.0 / 40320.0))))))))
+    return V * (low if abs(h) < 1e-3 else high)
+
+
 def _bounds(T, A, eta, lnc):
     """A bracket of the root of :func:`_newton`'s G: G(xhi) < 0 at V = T / eta, and G >= 0
     where eta V <= T/2 and A asinh(cV) <= T/2."""
@@ -127,9 +136,7 @@ def _newton(T, A, eta, lnc, x0, V0, tol):
         w = (damping + A * d * q) * inverse
         a_step = abs(step)
         if a_step < tol or (a_step < 1e-2 and w * step * step < tol * tol):   # converged
-            if a_step < 1e-3:             # V e^step, the series to step^5 / 120 < 1e-17
-                return V * (1.0 + step * (1.0 + step * (0.5 + step * (SIXTH + step * TWENTYFOURTH)))), x + step, it
-            return math.exp(x + step), x + step, it
+            return _grow(V, step), x + step, it
         # G is concave in x and convex in V: the Newton step in x ends beyond the root, the
         # one in V (x + ln(1 + step)) before it. Weigh them by w
         xn = x + step
@@ -195,18 +202,18 @@ def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
     return z, z
 
 
-def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq, ln2v0, sln2v0,
+def _slide_loop(lo, hi, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq, ln2v0, sln2v0,
                 f0, sf0,
                 fw, sfw, Vw, sVw, Vi, sVi, law, mode, from_v, eta, bonded, has_bonded,
                 z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow, masked):
-    """Step (v) with the state update of ``mode`` at every point (``masked``: only where
-    ``slow`` is set, the rest done by :func:`_fast_loop`); returns (evaluations, Newton
-    solves, most evaluations of one solve, the first point that failed or -1)."""
+    """Step (v) with the state update of ``mode`` at the points lo <= i < hi (``masked``:
+    only where ``slow`` is set, the rest done by :func:`_fast_loop`); returns (evaluations,
+    Newton solves, most evaluations of one solve, the first point that failed or -1)."""
     total = 0
     solves = 0
     most = 0
     bad = -1
-    for i in range(t1.size):
+    for i in range(lo, hi):
         if masked and slow[i] == 0:
             continue
         x1 = t1[i] + g * l1[i * sl1]
@@ -290,37 +297,58 @@ def _slide_loop(t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, d
     return total, solves, most, bad
 
 
-def _fast_loop(t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
+def _at(x, i):
+    """x[i] of a field, x itself of a single value (compiled: one specialisation each)."""
+    return x[i] if isinstance(x, np.ndarray) else x
+
+
+def _part(x, lo, hi):
+    """x[lo:hi] of a field, x itself of a single value."""
+    return x[lo:hi] if isinstance(x, np.ndarray) else x
+
+
+def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
                correct, eta, bonded, has_bonded, z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow):
     """The ageing law's PREDICT (``correct`` False) or CORRECT pass of :func:`_slide_loop` at
-    the points that take its most common branches: the state changes by less than 1e-4 over
+    the points lo <= i < hi that take its most common branches: the state changes by less than 1e-4 over
     the step (the series of :func:`_evolve`), u = V exp(psi / a) / (2 V0) > e^18 (asinh(u) =
-    ln 2u) and the first Newton step from the guess converges below 1e-3. The same
+    ln 2u) and the first Newton step from the guess converges (below 1e-2). The same
     arithmetic in the same order, in a loop without calls or early exits, which the
     compiler vectorises; ``slow[i]`` = 1 where another branch is needed (those points are
-    left as they are, for :func:`_slide_loop`). Returns the number of points done."""
+    left as they are, for :func:`_slide_loop`). ``l1`` ... ``ln2v0``: each a field (an
+    array over the points) or a single value (a float, read once). Returns the number of
+    points done."""
+    # views of the chunk, indexed from 0: the compiler then sees no index wrap around
+    t1, t3, z_old, V_old, z, psi, V, lnV = t1[lo:hi], t3[lo:hi], z_old[lo:hi], V_old[lo:hi], z[lo:hi], psi[lo:hi], \
+        V[lo:hi], lnV[lo:hi]
+    strength, v1, v3, o1, o3, slow = strength[lo:hi], v1[lo:hi], v3[lo:hi], o1[lo:hi], o3[lo:hi], slow[lo:hi]
+    l1, l3, sig, a, ia, b = _part(l1, lo, hi), _part(l3, lo, hi), _part(sig, lo, hi), _part(a, lo, hi), \
+        _part(ia, lo, hi), _part(b, lo, hi)
+    dtL, q, ln2v0 = _part(dtL, lo, hi), _part(q, lo, hi), _part(ln2v0, lo, hi)
+    if has_bonded:
+        bonded = bonded[lo:hi]
     tol = STEP_TOL if correct else PREDICT_TOL
     tol2 = tol * tol
     done = 0
-    for i in range(t1.size):
-        x1 = t1[i] + g * l1[i]
-        x3 = t3[i] + g * l3[i]
+    for i in range(hi - lo):
+        x1 = t1[i] + g * _at(l1, i)
+        x3 = t3[i] + g * _at(l3, i)
         T = math.sqrt(x1 * x1 + x3 * x3)
-        ai = a[i]
-        A = sig[i] * ai
+        ai = _at(a, i)
+        A = _at(sig, i) * ai
         Vo = V_old[i]
         Vg = V[i] if correct else Vo            # the Newton guess: the prediction, or V_{n-1}
         Vs = 0.5 * (Vo + Vg) if correct else Vo  # the state's constant rate over the step
         x = lnV[i]
         zo = z_old[i]
-        qi = q[i]
-        s = Vs * dtL[i]
+        qi = _at(q, i)
+        s = Vs * _at(dtL, i)
         e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH))
         phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
         zn = zo * e + qi * phi
         r = (e - 1.0) + qi * phi / zo
-        p = psi[i] + b[i] * r * (1.0 - r * (0.5 - r * THIRD))
-        lnc = p * ia[i] - ln2v0[i]
+        p = psi[i] + _at(b, i) * r * (1.0 - r * (0.5 - r * THIRD))
+        lnc = p * _at(ia, i) - _at(ln2v0, i)
         lnu = lnc + x
         G = T - eta * Vg - A * (lnu + LN2)
         damping = eta * Vg
@@ -328,10 +356,10 @@ def _fast_loop(t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
         step = G * inverse
         w = damping * inverse
         a_step = abs(step)
-        W = Vg * (1.0 + step * (1.0 + step * (0.5 + step * (SIXTH + step * TWENTYFOURTH))))
+        W = _grow(Vg, step)
         # & rather than `and`: no branches, so that the loop vectorises
         ok = (s < 1e-4) & (abs(r) < 1e-4) & (T > 0.0) & (A > 0.0) & (-740.0 < x) & (x < 700.0) \
-            & (lnu > 18.0) & (G != 0.0) & (a_step < 1e-3) & ((a_step < tol) | (w * step * step < tol2)) \
+            & (lnu > 18.0) & (G != 0.0) & (a_step < 1e-2) & ((a_step < tol) | (w * step * step < tol2)) \
             & (W >= 0.0) & (W < math.inf) & (abs(p) < math.inf) & (not (has_bonded & bonded[i * has_bonded]))
         scale = W / T
         w1 = scale * x1
@@ -351,8 +379,64 @@ def _fast_loop(t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
     return done
 
 
-_HELPERS = ("_lnsinh", "_asinh_exp", "_bounds", "_newton", "_evolve")
+#: points per chunk of :func:`_chunked`: its arrays' share (about 25 doubles a point) stays
+#: in the core's cache between the two passes
+CHUNK = 2048
+
+
+def _chunked(n, chunk, fast, fast_args, slide_args):
+    """Step (v) over ``n`` points chunk by chunk: :func:`_fast_loop` (where ``fast``), then
+    :func:`_slide_loop` on the points it left, while the chunk is in cache; returns
+    :func:`_slide_loop`'s counts over all chunks, with the fast pass's points counted as one
+    evaluation each."""
+    total = 0
+    solves = 0
+    most = 0
+    bad = -1
+    for lo in range(0, n, chunk):
+        hi = min(n, lo + chunk)
+        if fast:
+            done = _fast_loop(lo, hi, *fast_args)
+            total += done
+            solves += done
+            if done > 0:
+                most = max(most, 1)
+        t, k, m, b = _slide_loop(lo, hi, *slide_args)
+        total += t
+        solves += k
+        most = max(most, m)
+        if bad < 0 and b >= 0:
+            bad = b
+    return total, solves, most, bad
+
+
+_HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_evolve")
+_PASSES = ("_slide_loop", "_fast_loop")
 _KERNEL = []
+#: LLVM vectorises a loop over several arrays only behind run-time checks that they do not
+#: overlap, and by default gives up beyond 8 such checks; numba has no way to declare its
+#: arrays distinct, and the fast pass reads and writes about twenty. These raise the limits
+#: for the loops compiled after them in this process (vectorised or not, a loop without
+#: fast-math computes the same IEEE results in the same order).
+LLVM_OPTIONS = ("-runtime-memory-check-threshold=512", "-vectorize-memory-check-threshold=4096")
+
+
+def _compile_at(numba):
+    """The compiled :func:`_at` and :func:`_part`: of a field or of the single value, by the argument's type."""
+    from numba.core import types
+    from numba.extending import overload
+
+    @overload(_at, inline="always")
+    def _at_typed(x, i):
+        if isinstance(x, types.Array):
+            return lambda x, i: x[i]
+        return lambda x, i: x
+
+    @overload(_part, inline="always")
+    def _part_typed(x, lo, hi):
+        if isinstance(x, types.Array):
+            return lambda x, lo, hi: x[lo:hi]
+        return lambda x, lo, hi: x
 
 
 def _kernel():
@@ -363,26 +447,36 @@ def _kernel():
         except Exception:  # pragma: no cover
             _KERNEL.append(_slide_loop)
         else:
+            import llvmlite.binding as llvm
+
+            for option in LLVM_OPTIONS:
+                llvm.set_option("", option)
+            _compile_at(numba)
             jit = numba.njit(cache=True, nogil=True, error_model="numpy")
             g = globals()
             for name in _HELPERS:           # the pass calls them by their global names, inlined
                 g[name] = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(g[name])
-            _KERNEL.append(jit(_slide_loop))
-            _KERNEL.append(jit(_fast_loop))
+            for name in _PASSES:            # :func:`_chunked` calls them by their global names
+                g[name] = jit(g[name])
+            _KERNEL.append(jit(_chunked))
+            _KERNEL.append(True)
             return _KERNEL[0]
+        _KERNEL.append(_chunked)
     return _KERNEL[0]
 
 
 def _fast_kernel():
-    """The compiled :func:`_fast_loop` (None without numba: the scalar pass does every point)."""
+    """Whether :func:`_chunked` runs :func:`_fast_loop` (compiled only: without numba the
+    scalar pass does every point)."""
     _kernel()
-    return _KERNEL[1] if len(_KERNEL) > 1 else None
+    return len(_KERNEL) > 1
 
 
-def _full(pair, n):
-    """The (flat array, stride) ``pair`` of :func:`_flat` as an array of all ``n`` points."""
+def _field(pair):
+    """The (flat array, stride) ``pair`` of :func:`_flat` as :func:`_fast_loop` takes it: the
+    array of a field, the float of a single value."""
     arr, stride = pair
-    return arr if stride else np.full(n, arr[0])
+    return arr if stride else float(arr[0])
 
 
 def _flat(value, shape):
@@ -609,25 +703,20 @@ class RateState(Friction):
             out = [np.empty(shape) for _ in range(4)]
         arrays = (z_old.ravel(), state["V_old"].ravel(), z.ravel(), state["psi"].ravel(), state["V"].ravel(),
                   state["lnV"].ravel(), state["strength"].ravel(), *(o.ravel() for o in out))
-        fast = _fast_kernel() if law == AGEING and mode in (PREDICT, CORRECT) else None
-        done, masked = 0, False
-        if fast is not None:
+        n = t1.size
+        fast = bool(law == AGEING and mode in (PREDICT, CORRECT) and _fast_kernel())
+        if fast:
             slow = state.get("slow")
-            if slow is None or slow.size != t1.size:
-                slow = state["slow"] = np.empty(t1.size, dtype=np.int8)
-            n = t1.size
-            key = ("full", shape, dt)
-            if key not in self._cache:      # every parameter over the grid: loads the compiler vectorises
-                self._cache[key] = [_full(x, n) for x in (a, ia, b, dtL, q, ln2v0)]
-            done = int(fast(t1, t3, g, _full((l1, sl1), n), _full((l3, sl3), n), _full(sig, n), *self._cache[key],
-                            mode == CORRECT, float(eta), bonded, has_bonded, *arrays, slow))
-            masked = True
+            if slow is None or slow.size != n:
+                slow = state["slow"] = np.empty(n, dtype=np.int8)
         else:
             slow = np.zeros(1, dtype=np.int8)
-        total, solves, most, bad = _kernel()(
-            t1, t3, g, l1, sl1, l3, sl3, *sig, *a, *ia, *b, *dtL, *q, *ln2v0, *f0, *fw, *Vw, *Vi, law, mode,
-            from_v, float(eta), bonded, has_bonded, *arrays, slow, masked)
-        total, solves, most = total + done, solves + done, max(most, 1 if done else 0)
+        # (built without the fast pass too: the compiled driver types both calls)
+        fast_args = (t1, t3, g, *(_field(x) for x in ((l1, sl1), (l3, sl3), sig, a, ia, b, dtL, q, ln2v0)),
+                     mode == CORRECT, float(eta), bonded, has_bonded, *arrays, slow)
+        slide_args = (t1, t3, g, l1, sl1, l3, sl3, *sig, *a, *ia, *b, *dtL, *q, *ln2v0, *f0, *fw, *Vw, *Vi, law, mode,
+                      from_v, float(eta), bonded, has_bonded, *arrays, slow, fast)
+        total, solves, most, bad = _kernel()(n, CHUNK if fast else max(n, 1), fast, fast_args, slide_args)
         state["newton_evaluations"] += int(total)
         state["newton_solves"] += int(solves)
         state["newton_most"] = max(state["newton_most"], int(most))
