@@ -307,7 +307,7 @@ def _part(x, lo, hi):
     return x[lo:hi] if isinstance(x, np.ndarray) else x
 
 
-def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
+def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, b, dtL, q, ln2v0,
                correct, eta, bonded, has_bonded, z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow):
     """The ageing law's PREDICT (``correct`` False) or CORRECT pass of :func:`_slide_loop` at
     the points lo <= i < hi that take its most common branches: the state changes by less than 1e-4 over
@@ -322,8 +322,7 @@ def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
     t1, t3, z_old, V_old, z, psi, V, lnV = t1[lo:hi], t3[lo:hi], z_old[lo:hi], V_old[lo:hi], z[lo:hi], psi[lo:hi], \
         V[lo:hi], lnV[lo:hi]
     strength, v1, v3, o1, o3, slow = strength[lo:hi], v1[lo:hi], v3[lo:hi], o1[lo:hi], o3[lo:hi], slow[lo:hi]
-    l1, l3, sig, a, ia, b = _part(l1, lo, hi), _part(l3, lo, hi), _part(sig, lo, hi), _part(a, lo, hi), \
-        _part(ia, lo, hi), _part(b, lo, hi)
+    l1, l3, sig, a, b = _part(l1, lo, hi), _part(l3, lo, hi), _part(sig, lo, hi), _part(a, lo, hi), _part(b, lo, hi)
     dtL, q, ln2v0 = _part(dtL, lo, hi), _part(q, lo, hi), _part(ln2v0, lo, hi)
     if has_bonded:
         bonded = bonded[lo:hi]
@@ -348,7 +347,7 @@ def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, ia, b, dtL, q, ln2v0,
         zn = zo * e + qi * phi
         r = (e - 1.0) + qi * phi / zo
         p = psi[i] + _at(b, i) * r * (1.0 - r * (0.5 - r * THIRD))
-        lnc = p * _at(ia, i) - _at(ln2v0, i)
+        lnc = p * (1.0 / ai) - _at(ln2v0, i)   # 1 / a as the constants hold it, to the bit
         lnu = lnc + x
         G = T - eta * Vg - A * (lnu + LN2)
         damping = eta * Vg
@@ -712,7 +711,7 @@ class RateState(Friction):
         else:
             slow = np.zeros(1, dtype=np.int8)
         # (built without the fast pass too: the compiled driver types both calls)
-        fast_args = (t1, t3, g, *(_field(x) for x in ((l1, sl1), (l3, sl3), sig, a, ia, b, dtL, q, ln2v0)),
+        fast_args = (t1, t3, g, *(_field(x) for x in ((l1, sl1), (l3, sl3), sig, a, b, dtL, q, ln2v0)),
                      mode == CORRECT, float(eta), bonded, has_bonded, *arrays, slow)
         slide_args = (t1, t3, g, l1, sl1, l3, sl3, *sig, *a, *ia, *b, *dtL, *q, *ln2v0, *f0, *fw, *Vw, *Vi, law, mode,
                       from_v, float(eta), bonded, has_bonded, *arrays, slow, fast)
