@@ -349,3 +349,28 @@ def test_the_newton_step_grows_V_by_its_series_to_the_last_bits():
     got = np.array([grow(1.0, x) for x in h])
     want = np.array([math.exp(x) for x in h])
     assert np.max(np.abs(got - want) / want) <= 2 * np.finfo(float).eps
+
+
+def test_the_fast_pass_compiles_to_vector_code(tmp_path):
+    """The fast pass is compiled into vector instructions (laws/rate_state.LLVM_OPTIONS: without
+    them LLVM leaves the loop scalar, too many arrays to check for overlap). Compiled afresh
+    in a child process, with its own numba cache (cached code cannot be inspected)."""
+    import os
+    import subprocess
+    import sys
+
+    code = """
+import re
+import cracklab.laws.rate_state as rs
+from cracklab.cli.bench import bench_scene
+from cracklab.solver.stepper import Stepper
+for _ in Stepper(bench_scene(32, 32, "shear", 6, engine="exponential", law="rate_state")):
+    pass
+irs = [rs._fast_loop.inspect_llvm(sig) for sig in rs._fast_loop.signatures]
+print(len(irs), min(len(re.findall(r"<[0-9]+ x double>", ir)) for ir in irs))
+"""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    compiled, vector_ops = map(int, out.stdout.split()[-2:])
+    assert compiled >= 1 and vector_ops > 20
