@@ -42,6 +42,7 @@ class Scheme:
     convolves = ""       # "displacement" (kernel C against D) or "velocity" (Z against V)
     lag = 0              # the history starts this many steps back
     modal = ()           # (formulation, convolution, integration) of cracklab.modal_response
+    needs_work = False   # the Stepper gives it work arrays of the grid (run.work) at every step
 
     def finish(self, run, n, v_new):
         """After step (v): nothing to update by default."""
