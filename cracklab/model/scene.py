@@ -48,7 +48,9 @@ class Numerics:
     kernel (46), explicit update (37)) or "velocity" (Eq. 33, discretised kernel (45),
     semi-implicit update (50)) or "product" (velocity formulation with Z integrated
     exactly against the piecewise-linear velocity history, trapezoid update (50), one
-    predictor-corrector pass: does not grow in mode II, docs/stability.md); "auto" (default):
+    predictor-corrector pass: does not grow in mode II, docs/stability.md) or "product2" (the
+    product scheme with the law updated at the step's mean velocity: a slip-weakening front
+    converges at second order in dt, docs/stability.md "The order of a rupture front"); "auto" (default):
     product when a shear component is active, displacement otherwise. History ``engine``
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
@@ -140,9 +142,9 @@ class Scene:
         if self.beta is not None:
             object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
-        if self.two_materials and self.formulation != "product":
-            raise InputError("numerics.formulation", f"a pair of different materials runs the product scheme; "
-                                                     f"got {self.formulation!r}")
+        if self.two_materials and FORMULATIONS[self.formulation] != "product":
+            raise InputError("numerics.formulation", f"a pair of different materials runs the product scheme "
+                                                     f"('product' or 'product2'); got {self.formulation!r}")
         active = self.components
         if not active:
             raise InputError("loading", f"no load on a component the law {self.law.kind!r} acts on "

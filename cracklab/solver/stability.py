@@ -81,6 +81,10 @@ LIMITS = {
                3.7563, 3.7563, 3.7563, 3.7563, 3.7563, 3.7563, 3.7563),
     },
 }
+#: the product scheme with the law at the step's mean velocity (schemes/product2.py) has the
+#: product scheme's linear recurrence (the same modal scheme, the traction-free plane steps the
+#: same to the last bit): the same limits
+LIMITS["product2"] = LIMITS["product"]
 
 
 def gamma_max(formulation: str, mode: str, nu: float, *, measured: bool = False) -> float:

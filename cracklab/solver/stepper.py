@@ -123,9 +123,10 @@ class Stepper:
         dt = scene.dt
         scheme = self.scheme
         self.eta = self.response.eta
-        # the product scheme's trial slips, where the law (or contact) reads the slip
-        self.trial_slips = scheme.name == "product" and reads_slip(law, comps)
+        # the product schemes' trial slips, where the law (or contact) reads the slip
+        self.trial_slips = (scheme.name == "product" or scheme.mean_velocity) and reads_slip(law, comps)
         self.work = {c: np.empty(grid.shape) for c in comps} if self.trial_slips else None
+        self.vmean = {c: np.empty(grid.shape) for c in comps} if scheme.mean_velocity else None
         for n in range(self.n, scene.nsteps + 1):
             t = n * dt
             f, trial, law_step = scheme.estimate(self, n, t)

@@ -1,7 +1,7 @@
 """SCEC TPV3 with cracklab against the independent spectral BI code MDSBI (docs/tpv3.md).
 
     python studies/tpv3/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
-                               [--beta B | --domain L1 L3 | --formulation displacement]
+                               [--beta B | --domain L1 L3 | --formulation displacement|product2]
 
 Runs ``cracklab.scenes.tpv3`` at each grid spacing (default 100 m; ``--dx 100 50`` adds
 50 m, about seven times the cost), streams each run to OUT/tpv3_dx<dx>.zarr (station series
@@ -25,8 +25,9 @@ reruns); ``--report-only`` redraws from the stores. ``--quick`` runs 600 m and 4
 6 s into OUT/quick and writes its page and figures there (a smoke test: the acceptance
 applies at 100 m and is not checked). ``--beta B`` (a time-step check),
 ``--domain L1 L3`` (a larger periodic cell: the replicas) and ``--formulation
-displacement`` (the paper's displacement scheme) run the same problem into OUT/beta<B>,
-OUT/domain<L1>x<L3>km or OUT/displacement and write no page; the main page then shows
+displacement`` (the paper's displacement scheme) or ``--formulation product2`` (the product
+scheme with the law at the step's mean velocity) run the same problem into OUT/beta<B>,
+OUT/domain<L1>x<L3>km or OUT/<formulation> and write no page; the main page then shows
 them next to the main runs. Time stepping of the main runs: tpv3's own scheme (formulation
 "auto", i.e. the product scheme, at the builder's beta) with the exponential history
 engine (constant cost and memory per step), default thread counts.
@@ -197,9 +198,11 @@ def analyse(out, dxs, ref_dir=None):
 
 
 def variants(out, dxs):
-    """The time-step and scheme checks found next to the main runs (OUT/beta*, OUT/displacement)."""
+    """The time-step and scheme checks found next to the main runs (OUT/beta*, OUT/domain*,
+    OUT/displacement, OUT/product2)."""
     found = {}
-    for d in sorted(Path(out).glob("beta*")) + sorted(Path(out).glob("domain*")) + [Path(out) / "displacement"]:
+    for d in sorted(Path(out).glob("beta*")) + sorted(Path(out).glob("domain*")) + \
+            [Path(out) / "displacement", Path(out) / "product2"]:
         done = [x for x in dxs if store_path(d, x).with_suffix(".json").exists()]
         if d.is_dir() and done:
             found[d.name] = done
@@ -462,8 +465,8 @@ def _variant_section(res):
     return f"""## Time-step, scheme and cell checks
 
 The same problem with another time step, scheme or periodic cell (`run.py --beta B`,
-`--formulation displacement` or `--domain L1 L3`; stores in out/tpv3/beta*/,
-out/tpv3/displacement/, out/tpv3/domain*/), next to the main run (variant / main run;
+`--formulation displacement|product2` or `--domain L1 L3`; stores in out/tpv3/beta*/,
+out/tpv3/displacement/, out/tpv3/product2/, out/tpv3/domain*/), next to the main run (variant / main run;
 differences from MDSBI as in the acceptance table; the main runs use the product scheme,
 beta 0.1250, a 48 km x 24 km cell):
 
@@ -710,9 +713,10 @@ def main(argv=None) -> int:
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
     p.add_argument("--page", default=None, help="page to write (default docs/tpv3.md)")
     p.add_argument("--reference", default=None, help="directory of the MDSBI station files")
-    p.add_argument("--formulation", default=FORMULATION, choices=("auto", "displacement"),
-                   help="time stepping (default auto: tpv3's product scheme); 'displacement' runs the "
-                        "scheme check into OUT/displacement and writes no page")
+    p.add_argument("--formulation", default=FORMULATION, choices=("auto", "displacement", "product2"),
+                   help="time stepping (default auto: tpv3's product scheme); 'displacement' or 'product2' "
+                        "(the law at the step's mean velocity) runs the scheme check into OUT/<formulation> "
+                        "and writes no page")
     p.add_argument("--beta", type=float, default=None,
                    help="time-step factor instead of the builder's: a time-step check into OUT/beta<B>, no page")
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
@@ -728,7 +732,7 @@ def main(argv=None) -> int:
     elif args.domain is not None:
         variant = f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km"
     if sum(x is not None for x in (args.beta, args.domain)) + (args.formulation != FORMULATION) > 1:
-        p.error("give one of --beta, --domain, --formulation displacement at a time")
+        p.error("give one of --beta, --domain, --formulation displacement|product2 at a time")
     if args.quick:
         out = out / "quick"
         dxs = args.dx or [600.0, 400.0]

@@ -1,7 +1,7 @@
 """SCEC TPV5 with cracklab against the independent spectral BI code MDSBI (docs/tpv5.md).
 
     python studies/tpv5/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
-                               [--beta B | --domain L1 L3 | --step-cost B1 B2 ...]
+                               [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product2]
 
 Runs ``cracklab.scenes.tpv5`` (the free surface by mirror symmetry: the half plane below
 it) at each grid spacing (default 100 m; ``--dx 100 50`` adds 50 m), streams each run to
@@ -27,7 +27,10 @@ reruns); ``--report-only`` redraws from the stores. ``--quick`` runs 600 m and 4
 ``--domain L1 L3`` (another periodic length along strike L1 and half-plane depth L3) run
 the same problem into OUT/beta<B> or OUT/domain<L1>x<L3>km, together with the main cell's
 run at the same dx if it is missing (its baseline), and write no page; the main page then
-shows them next to the main runs. ``--step-cost B1 B2`` measures the cost of a 100 m step at
+shows them next to the main runs. ``--formulation product2`` (with ``--beta B`` or alone)
+runs the same problem with the product scheme's second-order variant (the law at the
+step's mean velocity, docs/stability.md) into OUT/product2[_beta<B>]; the page does not
+show it (its results are printed and kept in that directory). ``--step-cost B1 B2`` measures the cost of a 100 m step at
 each beta in one sitting (alternated rounds) into OUT/step_cost.json, which the page uses
 to say what a smaller beta costs. Time stepping of the main runs: tpv5's own (the product
 scheme at the builder's beta) with the exponential history engine.
@@ -64,20 +67,20 @@ ENGINE = "exponential"
 DOMAIN = (48000.0, 24000.0)
 
 
-def numerics():
+def numerics(formulation=None):
     from cracklab.model.scene import Numerics
 
-    return Numerics(formulation=FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
+    return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
 
 
-def build_scene(dx, t_end, beta=None, domain=None):
+def build_scene(dx, t_end, beta=None, domain=None, formulation=None):
     """``scenes.tpv5`` with its own stations, the rupture time of the half plane and the
     slip along strike at the end."""
     from cracklab.model.record import Record
     from cracklab.scenes import tpv5
 
     extra = {} if domain is None else {"domain": tuple(float(x) for x in domain)}
-    base = tpv5(dx=dx, t_end=t_end, beta=beta, numerics=numerics(), **extra)
+    base = tpv5(dx=dx, t_end=t_end, beta=beta, numerics=numerics(formulation), **extra)
     rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
     return base.replace(record=rec)
 
@@ -101,12 +104,12 @@ def _complete(store, scene):
         return False
 
 
-def run_one(dx, t_end, out, force=False, log=print, beta=None, domain=None):
+def run_one(dx, t_end, out, force=False, log=print, beta=None, domain=None, formulation=None):
     """Run (or reuse) one grid spacing; return its metadata dict."""
     import cracklab
     from cracklab.output.simulate import simulate
 
-    scene = build_scene(dx, t_end, beta, domain)
+    scene = build_scene(dx, t_end, beta, domain, formulation)
     store = store_path(out, dx)
     meta_path = store.with_suffix(".json")
     if not force and _complete(store, scene):
@@ -905,6 +908,9 @@ def main(argv=None) -> int:
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
                    help="periodic length along strike and half-plane depth in m instead of 48000 24000: "
                         "a check into OUT/domain<L1>x<L3>km, no page")
+    p.add_argument("--formulation", default=None, choices=("product2",),
+                   help="time stepping instead of tpv5's product scheme: 'product2' (the law at the step's mean "
+                        "velocity), with --beta or at the builder's, a check into OUT/product2[_beta<B>], no page")
     p.add_argument("--step-cost", type=float, nargs="+", default=None, metavar="BETA",
                    help="measure the cost of a 100 m step at these betas in one sitting (alternated) into "
                         "OUT/step_cost.json, no page")
@@ -917,6 +923,8 @@ def main(argv=None) -> int:
     out = Path(args.out)
     variant = (f"beta{args.beta:g}" if args.beta is not None else
                f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km" if args.domain is not None else None)
+    if args.formulation:
+        variant = args.formulation + (f"_{variant}" if variant else "")
     if args.quick:
         out = out / "quick"
         dxs, t_end = args.dx or [600.0, 400.0], 6.0
@@ -931,7 +939,8 @@ def main(argv=None) -> int:
         if not args.report_only:
             for dx in dxs:              # the baseline first: the main cell at the builder's beta
                 run_one(dx, t_end, main_out, force=False)
-                run_one(dx, t_end, main_out / variant, force=args.force, beta=args.beta, domain=args.domain)
+                run_one(dx, t_end, main_out / variant, force=args.force, beta=args.beta, domain=args.domain,
+                        formulation=args.formulation)
         res = analyse(main_out / variant, dxs, args.reference)
         (main_out / variant / "tpv5_results.json").write_text(json.dumps(res, indent=1))
         report(res, dxs)

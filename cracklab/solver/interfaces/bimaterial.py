@@ -22,6 +22,7 @@ import numpy as np
 
 from ..face import Face
 from ..loops import rotate
+from ..schemes import SCHEMES
 from ..spectral import Transforms
 from .base import Interface
 
@@ -31,7 +32,7 @@ class Bimaterial(Interface):
 
     def __init__(self, top, bottom, grid, dt, components, *, formulation="product", engine="direct", window=None,
                  transforms=None, nsteps=None, threads=None, rule=None):
-        if formulation != "product":
+        if SCHEMES[formulation].rule != "product":   # product2: the same response, another law update
             raise NotImplementedError(f"the bimaterial interface runs the product scheme, not {formulation!r}")
         self.materials = (top, bottom)
         self.components = tuple(sorted(components))

@@ -42,6 +42,8 @@ class Scheme:
     convolves = ""       # "displacement" (kernel C against D) or "velocity" (Z against V)
     lag = 0              # the history starts this many steps back
     modal = ()           # (formulation, convolution, integration) of cracklab.modal_response
+    mean_velocity = False  # it updates the law at the step's mean velocity: the Stepper gives it
+                           # arrays of the grid for it (run.vmean) and for trial slips (run.work)
 
     def finish(self, run, n, v_new):
         """After step (v): nothing to update by default."""
