@@ -245,8 +245,9 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     in units of 100 m, ``TPV6_REFERENCE_STATIONS`` the reference's) and the rupture time
     (slip rate above 1 mm/s); ``record`` replaces that (add the faces' fields ``u_1_top``,
     ... to record each side's motion). beta: at most 0.125 as ``tpv3``, relative to the
-    near side's c_s (it sets dt). ``materials`` = (top, bottom) replaces the pair (None:
-    (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/tpv6.md."""
+    near side's c_s (it sets dt). Time stepping: the scheme ``product2`` (rupture fronts at
+    second order in dt, docs/stability.md); ``numerics`` replaces it. ``materials`` = (top,
+    bottom) replaces the pair (None: (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/tpv6.md."""
     grid = _surface_fault_grid(dx, domain)
     n1 = grid.n1
     xc, depth = grid.x1[n1 // 2], grid.x3
@@ -258,7 +259,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                      _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV6_STATIONS}
-    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
+    numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
     comps = (1, 2, 3)
     pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
     if not isinstance(pair, (tuple, list)) or len(pair) != 2 or not all(isinstance(m, Material) for m in pair):

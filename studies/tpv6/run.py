@@ -23,8 +23,9 @@ A run whose store is complete and whose scene matches is not repeated (``--force
 ``--report-only`` redraws from the stores. A run the solver stops (exponential growth: the
 bimaterial problem with Coulomb friction is ill-posed at fine grids) is kept with its error
 in the .json and reported as such. ``--quick`` runs 400 m for 6 s into OUT/quick and writes
-its page and figures there (a smoke test). Time stepping: the product scheme (the only one
-for two materials) at the builder's beta with the exponential history engine.
+its page and figures there (a smoke test). Time stepping: the builder's, the scheme product2
+(the product scheme with the law at the step's mean velocity) at the builder's beta, with
+the exponential history engine.
 """
 from __future__ import annotations
 
@@ -388,28 +389,43 @@ def _run_rows(res, dxs):
     return "\n".join(rows)
 
 
+def _setting_label(normal) -> str:
+    """A short label of a law setting: "as stated" or "L* = 0.1 m" / "t* = 0.02 s"."""
+    parts = []
+    if normal.get("normal_slip_scale") is not None:
+        parts.append(f"L* = {normal['normal_slip_scale']:g} m")
+    if normal.get("normal_time") is not None:
+        parts.append(f"t* = {normal['normal_time']:g} s")
+    return ", ".join(parts) or "as stated"
+
+
+def _normal_of(res) -> dict:
+    return next(iter(res["runs"].values())).get("normal") or {}
+
+
 def _law_setting(res):
     """The sentence on the friction law's normal stress of the runs."""
-    normal = next(iter(res["runs"].values())).get("normal") or {}
+    normal = _normal_of(res)
+    other = ' The comparison with another setting is in "Another law setting" below.' if res.get("other") else ""
     if not normal:
         return ("The friction law is the benchmark's: the strength follows the current normal traction "
-                "(no regularisation).")
+                "(no regularisation)." + other)
     parts = []
     if "normal_slip_scale" in normal:
         parts.append(f"slip scale L* = `normal_slip_scale` = {normal['normal_slip_scale']:g} m")
     if "normal_time" in normal:
         parts.append(f"time scale t* = `normal_time` = {normal['normal_time']:g} s")
     return ("The friction law's strength uses the **regularised normal stress** sigma* (Prakash-Clifton, "
-            "docs/equations.md \"Regularised normal stress\"): " + " and ".join(parts) +
-            ". The comparison without it is in \"With and without the regularisation\" below.")
+            "docs/equations.md \"Regularised normal stress\"): " + " and ".join(parts) + "." + other)
 
 
-def _unregularised_rows(res, dxs):
-    """Rows comparing the runs with those of ``res["unregularised"]`` (the same study without
-    the regularisation) at the spacings both have."""
-    other = res.get("unregularised")
+def _other_rows(res, dxs):
+    """Rows comparing the runs with those of ``res["other"]`` (the same study with another law
+    setting, ``--other``) at the spacings both have."""
+    other = res.get("other")
     if not other:
         return ""
+    mine, theirs = _setting_label(_normal_of(res)), _setting_label(_normal_of(other))
     rows = []
     for s in REF_STATIONS:
         for dx in dxs:
@@ -425,15 +441,63 @@ def _unregularised_rows(res, dxs):
     summary = ""
     if acc is not None:
         ok = sum(r["pass"] for r in acc["checks"])
-        summary = (f"\n\nWithout the regularisation the acceptance at {C.ACCEPT_DX:g} m is "
+        summary = (f"\n\nWith {theirs} the acceptance at {C.ACCEPT_DX:g} m is "
                    f"{'PASS' if acc['pass'] else 'FAIL'} ({ok} of {len(acc['checks'])} checks hold).")
-    return ("\n## With and without the regularisation\n\nThe same study without the regularisation (the strength "
-            "follows the current normal traction), from its own output directory (`--unregularised`): peak slip "
-            "rate (m/s), rupture-time difference to MDSBI (s), final-slip difference (%) and normal-stress RMS "
-            "difference (MPa), regularised / not:\n\n"
-            "| station | dx | peak, regularised | peak, not | MDSBI | rupture time, regularised | not | "
-            "final slip %, regularised | not | normal RMS, regularised | not |\n"
+    return (f"\n## Another law setting\n\nThe same study with the law's normal stress {theirs} (the runs "
+            f"above: {mine}), from its own output directory (`--other`): peak slip rate (m/s), rupture-time "
+            f"difference to MDSBI (s), final-slip difference (%) and normal-stress RMS difference (MPa), "
+            f"{mine} / {theirs}:\n\n"
+            f"| station | dx | peak, {mine} | peak, {theirs} | MDSBI | rupture time, {mine} | {theirs} | "
+            f"final slip %, {mine} | {theirs} | normal RMS, {mine} | {theirs} |\n"
             "|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows) + summary + "\n")
+
+
+def _surface_rows(res):
+    """The section of studies/tpv6/surface.py's results (``--surface``): the slip rate's peak at
+    and below the surface stations, with the law and with a constant normal stress, and the
+    2D analogue of fronts that meet."""
+    sur = res.get("surface")
+    if not sur:
+        return ""
+    law, const = sur["runs"]["law"], sur["runs"]["constant_normal"]
+    dxs = sorted(law, key=float, reverse=True)
+    rows = []
+    for strike in ("+0", "-12", "+12"):
+        for k in dxs:
+            a, b = law[k], const[k]
+            names = [n for n in a if n.startswith(f"st{strike}_z")]
+            names.sort(key=lambda n: a[n]["x3"])
+            cells = " | ".join(f"{a[n]['peak']:.1f} / {b[n]['peak']:.1f}" for n in names)
+            z0 = names[0]
+            rows.append(f"| {int(strike):+d} km | {k} m | {cells} | {a[z0]['rupture_time']:.3f} / "
+                        f"{b[z0]['rupture_time']:.3f} |")
+    pairs = {"rock": "TPV6's near rock on both sides", "tpv6": "the TPV6 pair",
+             "one_speed": "one shear speed (3464 m/s), the far side's mu: one material of the harmonic modulus"}
+    arows = []
+    for pair, label in pairs.items():
+        by = sur["analogue"].get(pair, {})
+        for k in sorted(by, key=float, reverse=True):
+            arows.append(f"| {label} | {k} m | {by[k]['meet']['peak']:.1f} | {by[k]['quarter']['peak']:.1f} |")
+    return (f"""
+## The surface stations
+
+From `studies/tpv6/surface.py` (its output: `--surface`). TPV6 to {sur['t_end']:g} s, the slip rate's
+peak (m/s) along strike at the surface node, the first node below it, 400 m and 800 m deep,
+**with the law as stated / with a constant normal stress** of 120 MPa (the normal traction not
+followed), and the rupture time at the surface node (s):
+
+| strike | dx | surface | first node below | 400 m | 800 m | rupture time at the surface |
+|---|---|---|---|---|---|---|
+""" + "\n".join(rows) + """
+
+The 2D analogue (plane anti-plane problem, TPV6's stresses and friction at a constant normal
+stress on a 30 km periodic fault, nucleated at its centre): the peak slip rate (m/s) where the
+two fronts meet at the cell's edge, as the 3D front meets its mirror image at the free surface,
+and at a quarter of the cell (7.5 km from the centre, on the way):
+
+| sides | dx | where the fronts meet | at a quarter |
+|---|---|---|---|
+""" + "\n".join(arows) + "\n")
 
 
 def _contour_rows(res, dxs):
@@ -488,7 +552,8 @@ III) of each side for every distinct gamma, read from the kernels' Chebyshev tab
 summed the branch cuts (the 200 m set-up alone: 957 s then, 3.8 s now, on the same host in
 one sitting; docs/performance.md, "Bimaterial interface").
 Time stepping: `Numerics(formulation="{FORMULATION}", engine="{ENGINE}")`, the product
-scheme at the builder's beta (relative to the near side's c_s, which sets dt).
+scheme with the law at the step's mean velocity (rupture fronts at second order in dt,
+docs/stability.md "The order of a rupture front") at the builder's beta (relative to the near side's c_s, which sets dt).
 {"Runs stopped by the solver: " + ", ".join(stopped) + "." if stopped else ""}
 
 ## Acceptance
@@ -536,7 +601,7 @@ levels:
 """ + "\n\n".join(f"![{s}]({figrel}/tpv6_{s}.png)" for s in REF_STATIONS) + f"""
 
 ![rupture time]({figrel}/tpv6_rupture_time.png)
-{_unregularised_rows(res, dxs)}
+{_other_rows(res, dxs)}{_surface_rows(res)}
 """
     notes = Path(notes_path or HERE / "discussion.md")
     if notes.exists():
@@ -574,14 +639,18 @@ def page_numbers(res, dxs):
         d[f"pk_{key}_ref"] = f"{c['ref']['peak_rate']:.1f}"
         d[f"nmin_{key}_ref"] = f"{c['normal_range']['ref'][0]:.0f}"
         d[f"nmax_{key}_ref"] = f"{c['normal_range']['ref'][1]:.0f}"
-    other = res.get("unregularised") or {"stations": {}}
+    other = res.get("other") or {"stations": {}}
     for s, by in other["stations"].items():
         for k, c in by.items():
             key = f"{s.replace('-', 'm')}_{k}"
-            d[f"upk_{key}"] = f"{c['sim']['peak_rate']:.1f}"
-            d[f"udrt_{key}"] = f"{c['diff']['rupture_time']:+.2f}"
-            d[f"uslip_{key}"] = f"{100 * c['rel']['final_slip']:+.1f} %"
-            d[f"unrms_{key}"] = f"{c['normal_rms']:.1f}"
+            d[f"opk_{key}"] = f"{c['sim']['peak_rate']:.1f}"
+            d[f"odrt_{key}"] = f"{c['diff']['rupture_time']:+.2f}"
+            d[f"oslip_{key}"] = f"{100 * c['rel']['final_slip']:+.1f} %"
+            d[f"onrms_{key}"] = f"{c['normal_rms']:.1f}"
+    if other.get("acceptance"):
+        acc = other["acceptance"]
+        d["o_ok"] = f"{sum(r['pass'] for r in acc['checks'])} of {len(acc['checks'])}"
+    d.update(surface_numbers(res.get("surface")))
     for dx in dxs:
         m = res["runs"][f"{dx:g}"]
         d[f"wall_{dx:g}"] = f"{m['wall_s'] / 60:.0f}"
@@ -592,6 +661,28 @@ def page_numbers(res, dxs):
         d[f"stepping_{dx:g}"] = f"{(m['wall_s'] - m['setup_s']) / 60:.1f}"
         c = res["contours"][f"{dx:g}"]
         d[f"cmed_{dx:g}"] = f"{c['median_abs']:.2f}"
+    return d
+
+
+def surface_numbers(sur) -> dict:
+    """The surface study's peaks as discussion.md placeholders: s<strike>_<depth>_<law|const>_<dx>
+    (strike 0, m12, 12 km; depth 0, below (the first node under the surface), 400, 800) and
+    a<pair>_<meet|quarter>_<dx> of the 2D analogue; none without the study."""
+    d = {}
+    if not sur:
+        return d
+    for label, runs in (("law", sur["runs"]["law"]), ("const", sur["runs"]["constant_normal"])):
+        for k, r in runs.items():
+            for n, c in r.items():
+                strike, z = n[2:].split("_z")
+                depth = "below" if 0 < float(z) < 400 else z
+                d[f"s{strike.replace('-', 'm').replace('+', '')}_{depth}_{label}_{k}"] = f"{c['peak']:.1f}"
+                if depth == "0":
+                    d[f"rt{strike.replace('-', 'm').replace('+', '')}_{label}_{k}"] = f"{c['rupture_time']:.3f}"
+    for pair, by in sur["analogue"].items():
+        for k, r in by.items():
+            for where, c in r.items():
+                d[f"a{pair}_{where}_{k}"] = f"{c['peak']:.1f}"
     return d
 
 
@@ -634,8 +725,10 @@ def main(argv=None) -> int:
                    help="the law's normal_slip_scale L* (m): regularised normal stress (Prakash-Clifton)")
     p.add_argument("--normal-time", type=float, default=None,
                    help="the law's normal_time t* (s): regularised normal stress (Prakash-Clifton)")
-    p.add_argument("--unregularised", default=None,
-                   help="output directory of the same study without the regularisation, compared on the page")
+    p.add_argument("--other", default=None,
+                   help="output directory of the same study with another law setting, compared on the page")
+    p.add_argument("--surface", default=None,
+                   help="output directory of studies/tpv6/surface.py, the page's section on the surface stations")
     args = p.parse_args(argv)
     normal = {k: v for k, v in (("normal_slip_scale", args.normal_slip_scale), ("normal_time", args.normal_time))
               if v is not None}
@@ -653,8 +746,10 @@ def main(argv=None) -> int:
             run_one(dx, t_end, out, force=args.force, normal=normal)
     res = analyse(out, dxs, args.reference)
     res["contours"] = {f"{dx:g}": contour_offsets(out, dx, args.reference) for dx in dxs}
-    if args.unregularised:
-        res["unregularised"] = json.loads((Path(args.unregularised) / "tpv6_results.json").read_text())
+    if args.other:
+        res["other"] = json.loads((Path(args.other) / "tpv6_results.json").read_text())
+    if args.surface:
+        res["surface"] = json.loads((Path(args.surface) / "surface_results.json").read_text())
     (out / "tpv6_results.json").write_text(json.dumps(res, indent=1))
     report(res, dxs)
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))

@@ -34,7 +34,7 @@ def test_geometry_loads_and_friction(dx):
     law = sc.law
     assert isinstance(law, SlipWeakening) and law.sigma_n is None and law.follows_normal
     assert (law.mu_s, law.mu_d, law.D_c) == (0.677, 0.525, 0.40)
-    assert sc.components == (1, 2, 3) and sc.formulation == "product"
+    assert sc.components == (1, 2, 3) and sc.formulation == "product2"   # fronts at second order in dt
     # the fault: 30 km along strike, surface to 15 km depth (nodes whose dx x dx cell lies inside it)
     x, z = np.meshgrid(g.x1 - xc, g.x3, indexing="ij")
     inside = (np.abs(x) + dx / 2 <= 15000.0 + 1e-6) & (z + dx / 2 <= 15000.0 + 1e-6)

@@ -183,24 +183,44 @@ def test_verdict_without_the_100_m_run_is_not_checked():
     assert R.verdict_status(res) == ("FAIL", 1) and "faultst120dp075" in R._verdict(res)
 
 
-def test_the_page_names_the_law_setting_and_compares_the_unregularised_runs():
+def test_the_page_names_the_law_setting_and_compares_another_setting():
     R = _load("run")
     ref, _ = reference()
     reg = C.compare_station(simulation(t_r=5.06), ref)
     unreg = C.compare_station(simulation(t_r=5.06, slip_factor=1.5), ref)
-    res = {"runs": {"100": {"error": None, "normal": {"normal_slip_scale": 0.1}}},
-           "stations": {s: {"100": reg} for s in R.REF_STATIONS}}
-    assert "`normal_slip_scale` = 0.1 m" in R._law_setting(res)
-    assert R._unregularised_rows(res, [100.0]) == ""
-    res["unregularised"] = {"stations": {s: {"100": unreg} for s in R.REF_STATIONS},
-                            "acceptance": C.check_acceptance({s: {"100": unreg} for s in R.REF_STATIONS})}
-    text = R._unregularised_rows(res, [100.0])
+    res = {"runs": {"100": {"error": None, "normal": {}}},
+           "stations": {s: {"100": unreg} for s in R.REF_STATIONS}}
+    assert "no regularisation" in R._law_setting(res)
+    assert R._other_rows(res, [100.0]) == ""
+    res["other"] = {"runs": {"100": {"error": None, "normal": {"normal_slip_scale": 0.1}}},
+                    "stations": {s: {"100": reg} for s in R.REF_STATIONS},
+                    "acceptance": C.check_acceptance({s: {"100": reg} for s in R.REF_STATIONS})}
+    assert '"Another law setting"' in R._law_setting(res)
+    text = R._other_rows(res, [100.0])
+    assert "| peak, as stated | peak, L* = 0.1 m |" in text
     row = [line for line in text.splitlines() if line.startswith("| faultst120dp075 | 100 |")][0]
     cells = [c.strip() for c in row.strip("|").split("|")]
-    assert float(cells[3]) == pytest.approx(1.5 * float(cells[2]), rel=1e-2)     # the peaks, 1.5 times apart
-    assert cells[8] == "+50.0"                                                  # final slip, unregularised
-    assert "Without the regularisation the acceptance at 100 m is FAIL" in text
-    assert "no regularisation" in R._law_setting({"runs": {"100": {"normal": {}}}})
+    assert float(cells[2]) == pytest.approx(1.5 * float(cells[3]), rel=1e-2)     # the peaks, 1.5 times apart
+    assert cells[7] == "+50.0"                                                  # final slip, as stated
+    assert "With L* = 0.1 m the acceptance at 100 m is" in text
+    assert "`normal_slip_scale` = 0.1 m" in R._law_setting(res["other"])
+
+
+def test_the_surface_section_reads_the_surface_study():
+    R = _load("run")
+    run = {f"st{s}_z{z}": {"x3": float(z), "peak": p + (s == "+0") * 5.0, "rupture_time": 3.5}
+           for s in ("+0", "-12", "+12") for z, p in (("0", 20.0), ("100", 11.0), ("400", 9.5), ("800", 9.0))}
+    const = {k: dict(v, peak=v["peak"] + 1.0) for k, v in run.items()}
+    meet = {"meet": {"peak": 42.0, "rupture_time": 6.7}, "quarter": {"peak": 17.0, "rupture_time": 3.3}}
+    res = {"surface": {"t_end": 7.0, "runs": {"law": {"100": run}, "constant_normal": {"100": const}},
+                       "analogue": {"tpv6": {"100": meet}}}}
+    text = R._surface_rows(res)
+    row = [line for line in text.splitlines() if line.startswith("| +0 km | 100 m |")][0]
+    assert "| 25.0 / 26.0 | 16.0 / 17.0 | 14.5 / 15.5 | 14.0 / 15.0 |" in row     # by depth, law / constant
+    assert "| the TPV6 pair | 100 m | 42.0 | 17.0 |" in text
+    d = R.surface_numbers(res["surface"])
+    assert (d["s0_0_law_100"], d["s0_below_const_100"], d["s12_800_law_100"]) == ("25.0", "17.0", "9.0")
+    assert R._surface_rows({}) == ""
 
 
 def test_the_scene_takes_the_regularisation():
