@@ -43,7 +43,6 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 STRIKES_KM = (0, -12, 12)
 SIGMA_N = 120.0e6          # Pa: TPV6's initial compression, held constant in the control
-THRESHOLD = 1e-3           # m/s
 SAMPLE = 0.005             # s: the reference's sampling, on which the peak is read (as run.py)
 PAIRS_2D = ("rock", "tpv6", "one_speed")
 
@@ -53,11 +52,22 @@ def _stations(grid, xc):
     return {f"st{s:+d}_z{d:g}": (xc + 1000.0 * s, d) for s in STRIKES_KM for d in depths}
 
 
+def _compare():
+    """studies/tpv6/compare.py by its path (another study's compare may be imported)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("tpv6_surface_compare", HERE / "compare.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def _measure(t, v):
-    ts = np.arange(0.0, t[-1] + 1e-12, SAMPLE)
-    vs = np.interp(ts, t, v)
-    hit = np.flatnonzero(vs > THRESHOLD)
-    return {"peak": float(vs.max()), "rupture_time": float(ts[hit[0]]) if hit.size else None}
+    """Peak and rupture time of a slip-rate series, read as run.py reads the stations: on the
+    reference's 0.005 s samples (compare.resample, compare.peak, compare.rupture_time)."""
+    C = _compare()
+    ts, vs = C.resample(t, v, np.arange(0.0, t[-1] + SAMPLE, SAMPLE))
+    return {"peak": C.peak(ts, vs)[0], "rupture_time": C.rupture_time(ts, vs, C.THRESHOLD)}
 
 
 def run_3d(dx, t_end, constant_normal):
