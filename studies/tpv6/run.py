@@ -497,7 +497,36 @@ and at a quarter of the cell (7.5 km from the centre, on the way):
 
 | sides | dx | where the fronts meet | at a quarter |
 |---|---|---|---|
-""" + "\n".join(arows) + "\n")
+""" + "\n".join(arows) + "\n" + _inplane_rows(sur))
+
+
+def _inplane_rows(sur):
+    """The in-plane analogue's table (surface.py, part 4): peak slip rate at 12 and 6 km on
+    either side and the normal stress's range at +12 km, by law setting and dx."""
+    inp = sur.get("inplane")
+    if not inp:
+        return ""
+    rows = []
+    for key, by in inp.items():
+        label = "as stated" if key == "as stated" else f"L* = {key} m"
+        for k in sorted(by, key=float, reverse=True):
+            r = by[k]
+            if "error" in r:
+                rows.append(f"| {label} | {k} m | stopped by the solver | | | | |")
+                continue
+            lo, hi = r["+12"]["normal"]
+            rows.append(f"| {label} | {k} m | {r['-12']['peak']:.1f} | {r['-6']['peak']:.1f} | {r['+6']['peak']:.1f} | "
+                        f"{r['+12']['peak']:.1f} | {lo:.0f} to {hi:.0f} |")
+    return ("""
+The normal-stress feedback in a 2D in-plane analogue (plane in-plane problem, the TPV6 pair,
+the law following the normal traction, TPV6's stresses on a 60 km periodic fault nucleated
+at its centre, 6 s): the peak slip rate (m/s) 12 km and 6 km from the centre against the
+direction the compliant side moves (-) and along it (+), and the range of the normal
+stress at +12 km (MPa), with the law as stated and with the regularised normal stress:
+
+| law | dx | -12 km | -6 km | +6 km | +12 km | normal stress at +12 km |
+|---|---|---|---|---|---|---|
+""" + "\n".join(rows) + "\n")
 
 
 def _contour_rows(res, dxs):
@@ -667,7 +696,8 @@ def page_numbers(res, dxs):
 def surface_numbers(sur) -> dict:
     """The surface study's peaks as discussion.md placeholders: s<strike>_<depth>_<law|const>_<dx>
     (strike 0, m12, 12 km; depth 0, below (the first node under the surface), 400, 800) and
-    a<pair>_<meet|quarter>_<dx> of the 2D analogue; none without the study."""
+    a<pair>_<meet|quarter>_<dx> of the anti-plane analogue, i<law|L0p1|...>_<m12|m6|p6|p12>_<dx>
+    (and _nmin, _nmax) of the in-plane one; none without the study."""
     d = {}
     if not sur:
         return d
@@ -679,10 +709,18 @@ def surface_numbers(sur) -> dict:
                 d[f"s{strike.replace('-', 'm').replace('+', '')}_{depth}_{label}_{k}"] = f"{c['peak']:.1f}"
                 if depth == "0":
                     d[f"rt{strike.replace('-', 'm').replace('+', '')}_{label}_{k}"] = f"{c['rupture_time']:.3f}"
-    for pair, by in sur["analogue"].items():
+    for pair, by in sur.get("analogue", {}).items():
         for k, r in by.items():
             for where, c in r.items():
                 d[f"a{pair}_{where}_{k}"] = f"{c['peak']:.1f}"
+    for key, by in sur.get("inplane", {}).items():   # i<law|L0p1>_<m12|m6|p6|p12>_<dx>
+        law = "law" if key == "as stated" else "L" + key.replace(".", "p")
+        for k, r in by.items():
+            for st, c in r.items() if "error" not in r else ():
+                where = st.replace("-", "m").replace("+", "p")
+                d[f"i{law}_{where}_{k}"] = f"{c['peak']:.1f}"
+                d[f"i{law}_{where}_{k}_nmin"] = f"{c['normal'][0]:.0f}"
+                d[f"i{law}_{where}_{k}_nmax"] = f"{c['normal'][1]:.0f}"
     return d
 
 

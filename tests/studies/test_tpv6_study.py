@@ -218,7 +218,15 @@ def test_the_surface_section_reads_the_surface_study():
     row = [line for line in text.splitlines() if line.startswith("| +0 km | 100 m |")][0]
     assert "| 25.0 / 26.0 | 16.0 / 17.0 | 14.5 / 15.5 | 14.0 / 15.0 |" in row     # by depth, law / constant
     assert "| the TPV6 pair | 100 m | 42.0 | 17.0 |" in text
+    res["surface"]["inplane"] = {"as stated": {"100": {f"{k:+d}": {"peak": 10.0 + k, "rupture_time": 1.0,
+                                                                   "normal": [-150.0, -80.0]}
+                                                     for k in (-12, -6, 6, 12)}},
+                                 "0.1": {"100": {"error": "grew"}}}
+    text = R._surface_rows(res)
+    assert "| as stated | 100 m | -2.0 | 4.0 | 16.0 | 22.0 | -150 to -80 |" in text
+    assert "| L* = 0.1 m | 100 m | stopped by the solver |" in text
     d = R.surface_numbers(res["surface"])
+    assert (d["ilaw_p12_100"], d["ilaw_m6_100_nmin"]) == ("22.0", "-150") and "iL0p1_p12_100" not in d
     assert (d["s0_0_law_100"], d["s0_below_const_100"], d["s12_800_law_100"]) == ("25.0", "17.0", "9.0")
     assert R._surface_rows({}) == ""
 
@@ -228,3 +236,22 @@ def test_the_scene_takes_the_regularisation():
     sc = S.build_scene(400.0, t_end=1.0, normal={"normal_slip_scale": 0.1, "normal_time": 0.05})
     assert (sc.law.normal_slip_scale, sc.law.normal_time, sc.law.sigma_n) == (0.1, 0.05, None)
     assert S.build_scene(400.0, t_end=1.0).law.normal_slip_scale is None
+
+
+def test_the_surface_studys_analogues_are_the_scenes_it_describes():
+    S = _load("surface")
+    from cracklab.scenes import TPV6_FAR, TPV6_NEAR
+
+    one = S.scene_2d(200.0, "one_speed")
+    top, bottom = one.materials
+    assert (top.mu, top.cs, bottom) == (TPV6_FAR.mu, TPV6_NEAR.cs, TPV6_NEAR)     # one shear speed, two moduli
+    rock = S.scene_2d(200.0, "rock")
+    assert rock.material == TPV6_NEAR and not rock.two_materials and one.two_materials
+    assert one.law.sigma_n == S.SIGMA_N and one.components == (3,)
+    inp = S.scene_inplane(200.0, slip_scale=0.1)
+    assert inp.materials == (TPV6_FAR, TPV6_NEAR) and inp.law.sigma_n is None and inp.law.normal_slip_scale == 0.1
+    assert inp.components == (1, 2) and inp.formulation == "product2"
+    assert sorted(inp.record.stations) == ["+12", "+6", "-12", "-6"]
+    t = np.linspace(0.0, 1.0, 201)
+    m = S._measure(t, np.where(t >= 0.5, 2.0, 0.0))
+    assert m["peak"] == 2.0 and m["rupture_time"] == pytest.approx(0.5)
