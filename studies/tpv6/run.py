@@ -465,8 +465,8 @@ def _surface_rows(res):
     for strike in ("+0", "-12", "+12"):
         for k in dxs:
             a, b = law[k], const[k]
-            names = [n for n in a if n.startswith(f"st{strike}_z")]
-            names.sort(key=lambda n: a[n]["x3"])
+            # the surface, the first node below it, 400 m, 800 m (at 400 m the first node is 400 m)
+            names = [f"st{strike}_z{d:g}" for d in (0.0, float(k), 400.0, 800.0)]
             cells = " | ".join(f"{a[n]['peak']:.1f} / {b[n]['peak']:.1f}" for n in names)
             z0 = names[0]
             rows.append(f"| {int(strike):+d} km | {k} m | {cells} | {a[z0]['rupture_time']:.3f} / "
