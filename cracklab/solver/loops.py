@@ -310,13 +310,116 @@ def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S
                 bottom[h - 1 - k, j] = (g1 - g3).conjugate()
 
 
+
+# -- the bimaterial interface (solver/interfaces/bimaterial.py): both faces' five channels,
+# their combination and the interface's join in one pass per stage.  Arrays per face (first
+# index: 0 top, 1 bottom), then part (L, N, T) or channel (L, N, LN, NL, T; an absent
+# channel has zero rows).  Per face, f_L = s F_L + i F_LN, f_N = s F_N - i F_NL, f_T = s F_T
+# (solver/face.py); the interface's F = wp f+ + wm f- per part, back to components (Eq. 28
+# inverse) times nrm; and for a jump rate V, v+ = [(f+ - f-) + em V]/den, v- = v+ - V.
+# Without numba the interface runs its numpy expressions (the same numbers to round-off).
+_BIM_BLOCK = 256
+
+
+def _bim_predict_loop(V, S, e0, v0, dk, st, pre, K, sign, dt, wp, wm, c, s, nrm, H, f, O1, O2, O3):
+    # blocks of modes: within one, a loop per channel over a few rows (the hardware prefetches
+    # a handful of streams, not the sixty rows of a pass that takes every channel per mode)
+    M = c.size
+    F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
+    for b0 in range(0, M, _BIM_BLOCK):
+        b1 = min(M, b0 + _BIM_BLOCK)
+        for a in range(2):
+            for k in range(3):
+                for i in range(b0, b1):
+                    dk[a, k, i] = dk[a, k, i] + dt * V[a, k, i]
+            # channels L (on v_L), N (v_N), LN (v_N), NL (v_L, with the start-up weight of LN), T (v_T)
+            for j in range(5):
+                k = 0 if (j == 0 or j == 3) else (2 if j == 4 else 1)
+                je = 2 if j == 3 else j
+                for i in range(b0, b1):
+                    h = st[a, j, i] * dk[a, k, i] + pre[a, j, i] * (S[a, j, i] + e0[a, je, i] * v0[a, k, i])
+                    H[a, j, i] = h
+                    F[j, i - b0] = h + K[a, j, i] * V[a, k, i]
+            sg = sign[a]
+            for i in range(b0, b1):
+                F2 = F[2, i - b0]
+                F3 = F[3, i - b0]
+                f[a, 0, i] = sg * F[0, i - b0] + complex(-F2.imag, F2.real)
+                f[a, 1, i] = sg * F[1, i - b0] - complex(-F3.imag, F3.real)
+                f[a, 2, i] = sg * F[4, i - b0]
+        for i in range(b0, b1):
+            FL = wp[0, i] * f[0, 0, i] + wm[0, i] * f[1, 0, i]
+            FN = wp[1, i] * f[0, 1, i] + wm[1, i] * f[1, 1, i]
+            FT = wp[2, i] * f[0, 2, i] + wm[2, i] * f[1, 2, i]
+            cc = c[i]
+            ss = -s[i]
+            O1[i] = (cc * FL + ss * FT) * nrm
+            O3[i] = (cc * FT - ss * FL) * nrm
+            O2[i] = FN * nrm
+
+
+def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
+    for k in range(3):
+        for i in range(c.size):
+            if k == 0:
+                Vk = c[i] * X1[i] + s[i] * X3[i]
+            elif k == 1:
+                Vk = X2[i]
+            else:
+                Vk = c[i] * X3[i] - s[i] * X1[i]
+            p = ((f[0, k, i] - f[1, k, i]) + em[k, i] * Vk) / den[k, i]
+            v[0, k, i] = p
+            v[1, k, i] = p - Vk
+
+
+def _bim_correct_loop(X1, X2, X3, c, s, f, em, den, H, K, sign, wp, wm, nrm, O1, O2, O3, v):
+    """``v``: work rows (2, 3, M) for the faces' velocities of the split."""
+    for k in range(3):   # the split, as _bim_settle_loop
+        for i in range(c.size):
+            if k == 0:
+                Vk = c[i] * X1[i] + s[i] * X3[i]
+            elif k == 1:
+                Vk = X2[i]
+            else:
+                Vk = c[i] * X3[i] - s[i] * X1[i]
+            p = ((f[0, k, i] - f[1, k, i]) + em[k, i] * Vk) / den[k, i]
+            v[0, k, i] = p
+            v[1, k, i] = p - Vk
+    M = c.size
+    F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
+    for b0 in range(0, M, _BIM_BLOCK):
+        b1 = min(M, b0 + _BIM_BLOCK)
+        for a in range(2):
+            for j in range(5):
+                k = 0 if (j == 0 or j == 3) else (2 if j == 4 else 1)
+                for i in range(b0, b1):
+                    F[j, i - b0] = H[a, j, i] + K[a, j, i] * v[a, k, i]
+            sg = sign[a]
+            for i in range(b0, b1):
+                F2 = F[2, i - b0]
+                F3 = F[3, i - b0]
+                f[a, 0, i] = sg * F[0, i - b0] + complex(-F2.imag, F2.real)
+                f[a, 1, i] = sg * F[1, i - b0] - complex(-F3.imag, F3.real)
+                f[a, 2, i] = sg * F[4, i - b0]
+        for i in range(b0, b1):
+            FL = wp[0, i] * f[0, 0, i] + wm[0, i] * f[1, 0, i]
+            FN = wp[1, i] * f[0, 1, i] + wm[1, i] * f[1, 1, i]
+            FT = wp[2, i] * f[0, 2, i] + wm[2, i] * f[1, 2, i]
+            cc = c[i]
+            ss = -s[i]
+            O1[i] = (cc * FL + ss * FT) * nrm
+            O3[i] = (cc * FT - ss * FL) * nrm
+            O2[i] = FN * nrm
+
+
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
        "shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "axpy": _axpy_loop,
        "xpay": _xpay_loop, "plus_mean": _plus_mean_loop, "hkv": _hkv_loop,
        "mirror_pack": _mirror_pack_loop, "mirror_separate": _mirror_separate_loop,
        "mirror_join": _mirror_join_loop, "mirror_split": _mirror_split_loop,
        "mirror_rotate": _mirror_rotate_loop, "mirror_shear_correct": _mirror_shear_correct_loop,
-       "mirror_shear_predict": _mirror_shear_predict_loop}
+       "mirror_shear_predict": _mirror_shear_predict_loop, "bim_predict": _bim_predict_loop,
+       "bim_correct": _bim_correct_loop, "bim_settle": _bim_settle_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):

@@ -206,3 +206,33 @@ def test_the_pair_is_held_to_a_margin_below_the_smaller_sides_limit():
     assert two.beta == pytest.approx(min(0.5, two.beta_max))
     with pytest.raises(InputError, match=r"beta: .*of two materials 0.9 of the smaller side's limit"):
         one.replace(materials=(M, soft), beta=0.95 * sides)
+
+
+def _run_with_faces(scene):
+    st = None
+    for st in Stepper(scene):
+        pass
+    faces = {kind: st.faces(kind) for kind in ("u", "v")}
+    return {c: st.delta[c].copy() for c in st.delta}, faces
+
+
+@pytest.mark.parametrize("n3,comps", [(8, (1, 2, 3)), (8, (1, 3)), (1, (1, 2)), (1, (3,))])
+def test_compiled_passes_give_the_numpy_path(n3, comps):
+    """The bimaterial step's compiled passes (loops.bim_*) against the interface's numpy
+    expressions (loops.python_only): slip and both faces' motion, to round-off."""
+    from cracklab.solver import loops
+
+    bottom = Material(mu=0.6, cs=0.8, nu=0.3)
+    g = Grid(n1=16, n3=n3, L1=1.0, L3=n3 / 16 if n3 > 1 else 1.0)
+    rng = np.random.default_rng(3)
+    load = Loading(**{f"tau0_{c}": rng.standard_normal(g.shape) for c in comps})
+    sc = Scene(materials=(M, bottom), grid=g, law=TractionFree(contact=False), loading=load, t_end=0.4, beta=0.3,
+               record=Record(fields=()), numerics=PRODUCT)
+    got, got_faces = _run_with_faces(sc)
+    with loops.python_only():
+        want, want_faces = _run_with_faces(sc)
+    for c in want:
+        assert np.max(np.abs(got[c] - want[c])) <= 1e-12 * np.max(np.abs(want[c]))
+    for kind in ("u", "v"):
+        for key, w in want_faces[kind].items():
+            assert np.max(np.abs(got_faces[kind][key] - w)) <= 1e-12 * np.max(np.abs(w)), (kind, key)

@@ -15,16 +15,44 @@ forward and two inverse transforms per step, as for one material. Product scheme
 The in-plane channels (L, N and their coupling) run whenever an in-plane component is
 active: the faces' normal and tangential motions are coupled even where the jump of one
 of them is held at zero (an inactive component has V = 0).
+
+With numba each stage is one compiled pass over the modes (solver/loops.py, ``bim_*``):
+the predictor's ten channel updates, the faces' f and the join; the corrector's split, the
+faces' f and the join; the split after the step. The faces' velocities, running terms and
+f then live in arrays per face and part (or channel), and the channels' attributes are
+views of them. The two coupling channels of a face (LN, NL) share kernel and time steps,
+hence their start-up weight E_0(n), computed once. Without numba (or
+``loops.python_only``) the numpy expressions below run, the same numbers to round-off.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..face import Face
-from ..loops import rotate
+from ..face import CHANNELS, Face
+from ..loops import _compiled, rotate
 from ..schemes import SCHEMES
 from ..spectral import Transforms
 from .base import Interface
+
+
+class _Rows:
+    """Work arrays (lead..., Mp) whose rows of M values start at different offsets modulo
+    4096 bytes (64 bytes apart, from one array to the next too): a compiled pass that reads
+    and writes some sixty such rows per mode then keeps them in different cache sets (rows
+    whose starts agree modulo 4096 bytes, e.g. M = 256 x 65 complex values, compete for one
+    set and evict each other). Index [..., :M] for a row's values."""
+
+    def __init__(self, M):
+        self.M, self.row = M, 0
+
+    def __call__(self, lead, dtype=complex):
+        item = np.dtype(dtype).itemsize
+        Mp = self.M + ((64 - self.M * item) % 4096) // item     # row stride = 64 modulo 4096 bytes
+        n = int(np.prod(lead))
+        pool = np.zeros(n * Mp + 4096 // item, dtype=dtype)
+        off = ((self.row * 64 - pool.ctypes.data) % 4096) // item
+        self.row += n
+        return pool[off:off + n * Mp].reshape(tuple(lead) + (Mp,))
 
 
 class Bimaterial(Interface):
@@ -66,6 +94,100 @@ class Bimaterial(Interface):
         self.v = ({p: zero.copy() for p in self.parts}, {p: zero.copy() for p in self.parts})
         self._f = (None, None)
         self._out = {c: self.fft.empty(spectral=False) for c in self.components}
+        self._fused = None    # the compiled passes' arrays (_bind), once a step runs them
+
+    # -- the compiled passes -----------------------------------------------------------
+    _PARTS = ("L", "N", "T")
+    _CH = ("L", "N", "LN", "NL", "T")
+
+    def _compiled_passes(self):
+        """The three compiled passes, or None (no numba, or loops.python_only)."""
+        passes = tuple(_compiled(name) for name in ("bim_predict", "bim_correct", "bim_settle"))
+        return None if any(p is None for p in passes) else passes
+
+    def _bind(self, n):
+        """The compiled passes' arrays, the channels' running terms (and ``v``) made views of
+        them: filled from the channels' and ``v``'s current values (after set_state or the
+        numpy path's steps); at n = 1 (nothing pushed yet) the start-up terms are set by
+        the first pass."""
+        shape = self.fft.empty().shape
+        M = int(np.prod(shape))
+        rows = _Rows(M)
+        B = dict(V=rows((2, 3)), S=rows((2, 5)), e0=rows((2, 5), float), v0=rows((2, 3)), dk=rows((2, 3)),
+                 H=rows((2, 5)), st=rows((2, 5), float), pre=rows((2, 5), float), K=rows((2, 5), float),
+                 f=rows((2, 3)), wp=rows((3,), float), wm=rows((3,), float), em=rows((3,), float),
+                 den=rows((3,), float), cs=rows((2,), float), X=rows((3,)), O=rows((3,)), W=rows((2, 3)))
+        B["den"][...] = 1.0
+        B["sign"] = np.array([face.sign for face in self.faces])
+        for j, a in enumerate((self.c, self.s)):
+            B["cs"][j, :M] = np.broadcast_to(a, shape).reshape(-1)
+        B["c"], B["s"] = B["cs"][0, :M], B["cs"][1, :M]
+        for j, p in enumerate(self._PARTS):
+            if p in self.parts:
+                for key, x in (("wp", self._wp), ("wm", self._wm), ("em", self._em), ("den", self._den)):
+                    B[key][j, :M] = np.broadcast_to(x[p], shape).reshape(-1)
+        # component spectra of a jump rate (the inactive ones stay zero) and the interface's f
+        # spectra (1/N applied), in the transforms' spectral shape
+        B["Xs"] = [B["X"][k, :M].reshape(shape) for k in range(3)]
+        B["Os"] = [B["O"][k, :M].reshape(shape) for k in range(3)]
+        view = lambda a: a[:M].reshape(shape)
+        for a, face in enumerate(self.faces):
+            for j, name in enumerate(self._CH):
+                ch = face.channels.get(name)
+                if ch is None:
+                    continue
+                k = self._PARTS.index(CHANNELS[name][1])
+                for key, val in (("st", ch.static), ("pre", ch.pre), ("K", ch.K)):
+                    B[key][a, j, :M] = np.broadcast_to(val, shape).reshape(-1)
+                if n > 1:   # running terms of the steps so far (the L / NL and N / LN pairs agree)
+                    B["H"][a, j, :M] = ch.H.reshape(-1)
+                    B["v0"][a, k, :M] = ch.v0.reshape(-1)
+                    B["dk"][a, k, :M] = ch.dknown.reshape(-1)
+                ch.H, ch.v0, ch.dknown = view(B["H"][a, j]), view(B["v0"][a, k]), view(B["dk"][a, k])
+            for k, p in enumerate(self._PARTS):
+                if p in self.parts:
+                    B["V"][a, k, :M] = self.v[a][p].reshape(-1)
+        self.v = tuple({p: view(B["V"][a, k]) for k, p in enumerate(self._PARTS) if p in self.parts}
+                       for a in range(2))
+        B["M"], B["shape"] = M, shape
+        self._fused = B
+
+    def _inverse_fused(self) -> dict:
+        """The active components' f from the spectra the last pass wrote (O, 1/N applied)."""
+        O = self._fused["Os"]
+        return self.fft.inverse_components({c: O[c - 1] for c in self.components}, self._out, prescaled=True)
+
+    def _forward_fused(self, fields: dict) -> list:
+        """Component spectra of the jump ``fields`` into X (the inactive ones stay zero), flat."""
+        B = self._fused
+        X = B["Xs"]
+        self.fft.forward_components({c: fields[c] for c in self.components}, {c: X[c - 1] for c in self.components})
+        return [B["X"][k, :B["M"]] for k in range(3)]
+
+    def _predict_fused(self, passes, n):
+        B = self._fused
+        shape, M = B["shape"], B["M"]
+        if n == 1:   # the start-up terms: v0 = V_0 and, through the pass's dknown += dt V, dknown = dt V_0 / 2
+            B["v0"][...] = B["V"]
+            np.multiply(B["V"], -0.5 * self.faces[0].dt, out=B["dk"])
+        for a, face in enumerate(self.faces):
+            face.n = n + 1
+            chans = face.channels
+            for j, name in enumerate(self._CH):
+                ch = chans.get(name)
+                if ch is None:
+                    continue
+                ch.engine.push(B["V"][a, self._PARTS.index(CHANNELS[name][1]), :M],
+                               out=B["S"][a, j, :M].reshape(shape))
+                if name != "NL":   # NL: the same engine's E_0 as LN (same kernel and gammas)
+                    B["e0"][a, j, :M] = ch.engine.start_weight(n).reshape(-1)
+            for ch in chans.values():
+                ch.engine.launch()
+        O = B["O"][:, :M]
+        passes[0](B["V"], B["S"], B["e0"], B["v0"], B["dk"], B["st"], B["pre"], B["K"], B["sign"],
+                  float(self.faces[0].dt), B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), B["H"], B["f"],
+                  *O)
+        return self._inverse_fused()
 
     @property
     def n(self) -> int:
@@ -96,10 +218,23 @@ class Bimaterial(Interface):
 
     # -- protocol --------------------------------------------------------------------
     def predict(self, v_prev):
+        n = self.faces[0].n
+        passes = self._compiled_passes() if n >= 1 else None
+        if passes is not None:
+            if self._fused is None:
+                self._bind(n)
+            return self._predict_fused(passes, n)
+        self._unbind()
         self._f = tuple(face.predict(v) for face, v in zip(self.faces, self.v))
         return self._join()
 
     def correct(self, v_pred):
+        if self._fused is not None:
+            B = self._fused
+            X = self._forward_fused(v_pred)
+            self._compiled_passes()[1](*X, B["c"], B["s"], B["f"], B["em"], B["den"], B["H"], B["K"], B["sign"],
+                                       B["wp"], B["wm"], float(self.fft.norm), *B["O"][:, :B["M"]], B["W"])
+            return self._inverse_fused()
         V = self._rotated(v_pred)
         vs = self._split(V)
         self._f = tuple(face.correct(v) for face, v in zip(self.faces, vs))
@@ -107,7 +242,25 @@ class Bimaterial(Interface):
 
     def settle(self, v_new):
         """After step (v): the faces' velocities of this step, for the next push."""
+        if self._fused is not None:
+            B = self._fused
+            X = self._forward_fused(v_new)
+            self._compiled_passes()[2](*X, B["c"], B["s"], B["f"], B["em"], B["den"], B["V"])
+            return
         self.v = self._split(self._rotated(v_new))
+
+    def _unbind(self):
+        """Back to the numpy path: the channels and ``v`` keep their values in arrays of their own."""
+        if self._fused is None:
+            return
+        for face in self.faces:
+            for ch in face.channels.values():
+                ch.H, ch.v0, ch.dknown = (None if x is None else x.copy() for x in (ch.H, ch.v0, ch.dknown))
+        self.v = tuple({p: x.copy() for p, x in v.items()} for v in self.v)
+        f, M, shape = self._fused["f"], self._fused["M"], self._fused["shape"]
+        self._f = tuple({p: f[a, k, :M].reshape(shape).copy() for k, p in enumerate(self._PARTS) if p in self.parts}
+                        for a in range(2))
+        self._fused = None
 
     def face_fields(self, kind: str, jump: dict) -> dict:
         """Each face's own motion after the last step: {(side, component): field}, side
@@ -152,6 +305,7 @@ class Bimaterial(Interface):
                 "v": [{p: a.copy() for p, a in v.items()} for v in self.v]}
 
     def set_state(self, state: dict) -> None:
+        self._fused = None   # the compiled passes rebind to the restored arrays at the next step
         for face, st in zip(self.faces, state["faces"]):
             face.set_state(st)
         self.v = tuple({p: np.array(a) for p, a in v.items()} for v in state["v"])
