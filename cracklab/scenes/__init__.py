@@ -136,7 +136,7 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.125: the rupture time converges with dt (docs/tpv3.md, "Time step")
+    if beta is None:  # at most 0.125: the rupture times within 0.05 s at 100 m (docs/tpv3.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
@@ -211,7 +211,7 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv5.md, "Time step")
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv5.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
@@ -268,7 +268,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
     if not isinstance(pair, (tuple, list)) or len(pair) != 2 or not all(isinstance(m, Material) for m in pair):
         raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step"), for the side that sets dt
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Rupture time"), for the side that sets dt
         fast = max(pair, key=lambda m: m.cs)
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
     return Scene(materials=tuple(pair), grid=grid, law=law,
