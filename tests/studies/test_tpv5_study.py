@@ -193,3 +193,40 @@ def test_the_main_runs_are_the_builders_default_time_stepping():
     assert main.beta == builder.beta == 0.125 and main.dt == builder.dt
     first = run.build_scene(1000.0, 0.5, formulation="product")
     assert first.formulation == "product" and first.beta == 0.125
+
+
+def test_scheme_check_and_second_order_lag_fit_on_the_page(tmp_path):
+    """A first-order check (OUT/product) 0.06 s late at one station is reported as missing
+    one of the 15 numbers next to the main run; beta checks of a product2 main run are
+    fitted at order 2 (lag = a + b beta^2), so a lag of 30 ms at beta 0.125 and 7.5 ms at
+    0.0625 is all time step (a = 0)."""
+    refs = {s: C.load_reference(s) for s in run.REF_STATIONS}
+    meta = {"dx": 100.0, "t_end": 12.0, "n1": 480, "n3": 240, "shape": [480, 241], "beta": 0.125,
+            "dt": 3.6e-3, "nsteps": 3326, "wall_s": 300.0, "domain": [48000.0, 24000.0], "s_per_step": 0.09,
+            "formulation": "product2", "engine": "exponential", "ruptured_fraction": 1.0,
+            "surface_rupture_time": 4.5}
+
+    def analysed(shift, **extra):
+        cmp = run.compare_run(_dataset(shift=shift) if shift else _dataset(), refs)
+        r = {"runs": {"100": {**meta, **extra}}, "stations": {s: {"100": c} for s, c in cmp.items()}}
+        r["acceptance"] = C.check_acceptance(r["stations"])
+        return r
+
+    res = analysed(0.03)
+    res["variants"] = {"product": analysed(0.06, formulation="product"),
+                       "beta0.0625": analysed(0.0075, beta=0.0625, nsteps=6652)}
+    res["baselines"] = {"runs": res["runs"], "stations": res["stations"]}
+    s = "faultst-075dp075"
+    lags = [run._lag(res["stations"][s]["100"]), run._lag(res["variants"]["beta0.0625"]["stations"][s]["100"])]
+    lag = {s: {**C.lag_fit([0.125, 0.0625], lags, beta_now=0.125, order=C.ORDER["product2"]),
+               "betas": [0.125, 0.0625], "lags": lags}}
+    assert lag[s]["order"] == 2 and abs(lag[s]["a"]) < 2e-3 and lag[s]["b"] * 0.125**2 == pytest.approx(0.03, abs=2e-3)
+    res["lag"] = lag
+    sentence = run._scheme_sentence(res)
+    assert "first-order product scheme" in sentence and "misses 1 of the 15" in sentence
+    assert "with product2 at beta = 0.125" in sentence
+    text = run._variant_section(res)
+    assert "| product, beta 0.1250, 48 km x 24 km |" in text and "lag = a + b beta^2" in text
+    page = Path(run.write_page(res, [100.0], tmp_path / "tpv5.md", "figures")).read_text()
+    assert "{" not in page and "}" not in page and "product2 is second order in dt. Fitted over beta^2" in page
+    assert "`run.py --dx 100 --formulation product`" in page and "`run.py --dx 100 --beta 0.0625`" in page
