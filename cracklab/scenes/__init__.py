@@ -117,7 +117,11 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     lie exactly on the patch edge, 72.9 MPa at its corners; the patch carries exactly
     9 km^2 of overstress at any dx). Likewise a node whose cell is partly outside the
     30 km x 15 km fault has a partly infinite (i.e. infinite) strength: it is bonded.
-    See docs/tpv3.md."""
+
+    Time stepping without ``numerics``: ``Numerics(formulation="product2")``, the product
+    scheme with the law's slip path advanced by the trapezoid rule, S_n = S_{n-1} +
+    dt |v_{n-1} + v*_n|/2 (rupture times second order in dt; docs/stability.md, "The order
+    of a rupture front"), at beta = min(0.125, 0.95 beta_max). See docs/tpv3.md."""
     L1, L3 = domain
     n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
     grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
@@ -131,8 +135,8 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                      _tpv3_cell_fraction(grid.x3 - zc, grid.dx3, 7500.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
-    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.125: the rupture time converges with dt (docs/tpv3.md, "Time step")
+    numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
+    if beta is None:  # at most 0.125: the rupture times within 0.05 s at 100 m (docs/tpv3.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
@@ -188,9 +192,10 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     continues the fault, so the fault's top row slips). Records the stations
     ``TPV5_STATIONS``, named ``faultst<strike>dp<depth>`` in units of 100 m (faultst000dp000
     on the surface above the hypocentre), and the rupture time (slip rate above 1 mm/s).
-    beta: at most 0.09, where every station's rupture time is within 0.05 s of the
-    reference at 100 m (``tpv3``'s 0.125 misses it at two stations by 0.01 s). See
-    docs/tpv5.md."""
+    Time stepping without ``numerics`` as ``tpv3``: ``formulation="product2"`` (second
+    order in dt) at beta = min(0.125, 0.95 beta_max); the first-order product scheme needed
+    beta = 0.09 to keep every station's rupture time within 0.05 s of the reference at
+    100 m. See docs/tpv5.md."""
     grid = _surface_fault_grid(dx, domain)
     n1 = grid.n1
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
@@ -205,9 +210,9 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
                      _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
-    numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.09: the rupture times within 0.05 s at 100 m (docs/tpv5.md, "Rupture time")
-        beta = min(0.09, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
+    numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv5.md, "Rupture time")
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv5")
@@ -264,7 +269,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
     if not isinstance(pair, (tuple, list)) or len(pair) != 2 or not all(isinstance(m, Material) for m in pair):
         raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Time step"), for the side that sets dt
+    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Rupture time"), for the side that sets dt
         fast = max(pair, key=lambda m: m.cs)
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
     return Scene(materials=tuple(pair), grid=grid, law=law,

@@ -64,34 +64,40 @@ def load_reference(station: str, directory=None) -> dict:
     return _C3.load_reference(station, directory or default_reference_dir())
 
 
-def lag_fit(betas, lags, *, limit=TOL_RUPTURE_TIME, beta_now=None) -> dict:
-    """Fit lag(beta) = a + b beta (least squares) to rupture-time lags (s) measured at the
-    time-step factors ``betas`` (at least two different ones): a first-order scheme's lag
-    is linear in dt. Returns {"a": the lag at beta -> 0 (what the grid leaves), "b": s per
-    unit beta, "beta_within": the largest beta whose fitted |lag| is within ``limit``
-    (inf when every beta is, 0 when none is, i.e. |a| > limit), "steps_factor": beta_now /
-    beta_within, the factor in steps (and so in cost: a step costs the same at any beta
-    with the exponential engine) to reach it from ``beta_now`` (the largest beta given,
-    by default; 1 when it already holds)}."""
+#: the order in dt of each scheme's rupture time (docs/stability.md, "The order of a rupture front")
+ORDER = {"product": 1, "product2": 2}
+
+
+def lag_fit(betas, lags, *, limit=TOL_RUPTURE_TIME, beta_now=None, order=1) -> dict:
+    """Fit lag(beta) = a + b beta^p (least squares, p = ``order``) to rupture-time lags (s)
+    measured at the time-step factors ``betas`` (at least two different ones): the lag of
+    a scheme of order p in dt is a + O(dt^p). Returns {"a": the lag at beta -> 0 (what the
+    grid leaves), "b": s per unit beta^p, "order": p, "beta_within": the largest beta whose
+    fitted |lag| is within ``limit`` (inf when every beta is, 0 when none is, i.e.
+    |a| > limit), "steps_factor": beta_now / beta_within, the factor in steps (and so in
+    cost: a step costs the same at any beta with the exponential engine) to reach it from
+    ``beta_now`` (the largest beta given, by default; 1 when it already holds)}."""
     x = np.asarray(betas, dtype=float)
     y = np.asarray(lags, dtype=float)
     if x.shape != y.shape or x.size < 2 or np.unique(x).size < 2:
         raise ValueError("need lags at two or more different beta")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and np.all(x > 0)):
         raise ValueError("betas must be > 0 and lags finite")
-    b, a = np.polyfit(x, y, 1)
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
+    b, a = np.polyfit(x ** order, y, 1)
     beta_now = float(x.max() if beta_now is None else beta_now)
     if abs(a) > limit:
         within = 0.0
-    elif abs(b) * beta_now <= 1e-9 * limit:      # no dependence on beta (to round-off)
+    elif abs(b) * beta_now ** order <= 1e-9 * limit:      # no dependence on beta (to round-off)
         within = math.inf
     else:
-        # |a + b beta| <= limit for 0 <= beta <= within
+        # |a + b beta^p| <= limit for 0 <= beta <= within
         edge = (math.copysign(limit, b) - a) / b
-        within = max(edge, 0.0)
+        within = max(edge, 0.0) ** (1.0 / order)
     factor = math.inf if within == 0 else max(1.0, beta_now / within)
-    return {"a": float(a), "b": float(b), "beta_within": float(within), "steps_factor": float(factor),
-            "beta_now": beta_now}
+    return {"a": float(a), "b": float(b), "order": int(order), "beta_within": float(within),
+            "steps_factor": float(factor), "beta_now": beta_now}
 
 
 def domain_change(main: dict, other: dict) -> dict:

@@ -1,7 +1,7 @@
 """SCEC TPV5 with cracklab against the independent spectral BI code MDSBI (docs/tpv5.md).
 
     python studies/tpv5/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
-                               [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product2]
+                               [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product]
 
 Runs ``cracklab.scenes.tpv5`` (the free surface by mirror symmetry: the half plane below
 it) at each grid spacing (default 100 m; ``--dx 100 50`` adds 50 m), streams each run to
@@ -27,13 +27,14 @@ reruns); ``--report-only`` redraws from the stores. ``--quick`` runs 600 m and 4
 ``--domain L1 L3`` (another periodic length along strike L1 and half-plane depth L3) run
 the same problem into OUT/beta<B> or OUT/domain<L1>x<L3>km, together with the main cell's
 run at the same dx if it is missing (its baseline), and write no page; the main page then
-shows them next to the main runs. ``--formulation product2`` (with ``--beta B`` or alone)
-runs the same problem with the product scheme's second-order variant (the law at the
-step's mean velocity, docs/stability.md) into OUT/product2[_beta<B>]; the page does not
-show it (its results are printed and kept in that directory). ``--step-cost B1 B2`` measures the cost of a 100 m step at
-each beta in one sitting (alternated rounds) into OUT/step_cost.json, which the page uses
-to say what a smaller beta costs. Time stepping of the main runs: tpv5's own (the product
-scheme at the builder's beta) with the exponential history engine.
+shows them next to the main runs. ``--formulation product`` (with ``--beta B`` or alone)
+runs the same problem with the first-order product scheme (the law's slip path by the
+rectangle rule, docs/stability.md) into OUT/product[_beta<B>], shown next to the main runs
+as well. ``--step-cost B1 B2`` measures the cost of a 100 m step at each beta in one
+sitting (alternated rounds) into OUT/step_cost.json, which the page uses to say what a
+smaller beta costs. Time stepping of the main runs: tpv5's own (product2, the product
+scheme with the law at the step's mean velocity, second order in dt, at the builder's
+beta) with the exponential history engine.
 """
 from __future__ import annotations
 
@@ -62,9 +63,11 @@ PRETTY = {"faultst000dp000": "faultst000dp000 (free surface above the hypocentre
 POSITION_KM = {"faultst000dp000": (0.0, 0.0), "faultst000dp030": (0.0, 3.0), "faultst000dp075": (0.0, 7.5),
                "faultst-075dp075": (-7.5, 7.5), "faultst075dp075": (7.5, 7.5)}
 SURFACE = "faultst000dp000"
-FORMULATION = "auto"      # tpv5's own choice: the product scheme
+FORMULATION = "product2"  # the builder's default: the product scheme at second order in dt
 ENGINE = "exponential"
 DOMAIN = (48000.0, 24000.0)
+BETA_SHOWN = 0.5          # a fitted beta beyond this lies past any builder's beta (at most 0.5): shown as "> 0.5"
+SCATTER = 0.005           # s: the 1 mm/s crossing scatters by a few ms about its limit (docs/stability.md)
 
 
 def numerics(formulation=None):
@@ -229,9 +232,9 @@ def analyse(out, dxs, ref_dir=None):
 
 
 def variants(out):
-    """The time-step and cell checks found next to the main runs: {name: [dx, ...]}."""
+    """The time-step, cell and scheme checks found next to the main runs: {name: [dx, ...]}."""
     found = {}
-    for d in sorted(Path(out).glob("beta*")) + sorted(Path(out).glob("domain*")):
+    for d in sorted(Path(out).glob("beta*")) + sorted(Path(out).glob("domain*")) + sorted(Path(out).glob("product*")):
         done = sorted((float(p.stem.split("dx")[1]) for p in d.glob("tpv5_dx*.json")), reverse=True)
         if d.is_dir() and done:
             found[d.name] = done
@@ -258,7 +261,8 @@ def add_variants(res, main_out, ref_dir=None):
             bs = [base["runs"][key]["beta"]] + [v["runs"][key]["beta"] for v in betas.values()]
             cs = [base["stations"][s][key]] + [v["stations"][s][key] for v in betas.values()]
             lags = [c["fine"]["rupture_time_interp"] - c["ref"]["rupture_time_interp"] for c in cs]
-            fit = C.lag_fit(bs, lags, beta_now=base["runs"][key]["beta"])
+            fit = C.lag_fit(bs, lags, beta_now=base["runs"][key]["beta"],
+                            order=C.ORDER.get(base["runs"][key]["formulation"], 1))
             fit["betas"], fit["lags"] = bs, lags
             fit["sampled"] = [c["diff"]["rupture_time"] for c in cs]
             res["lag"][s] = fit
@@ -502,7 +506,7 @@ def _fmt_positions(res, dxs):
 
 def _describe(meta):
     L1, L3 = meta.get("domain", DOMAIN)
-    return f"beta {meta['beta']:.4f}, {L1 / 1e3:g} km x {L3 / 1e3:g} km"
+    return f"{meta['formulation']}, beta {meta['beta']:.4f}, {L1 / 1e3:g} km x {L3 / 1e3:g} km"
 
 
 def _variant_section(res):
@@ -526,12 +530,13 @@ def _variant_section(res):
                     f"{100 * b['rel']['peak_rate']:+.1f} / {100 * a['rel']['peak_rate']:+.1f} | "
                     f"{b['diff']['final_stress']:+.2f} / {a['diff']['final_stress']:+.2f} | "
                     f"{mv['nsteps']} / {ma['nsteps']} | {mv['wall_s'] / 60:.1f} / {ma['wall_s'] / 60:.1f} |")
-    text = f"""## Time-step and cell checks
+    text = f"""## Time-step, scheme and cell checks
 
-The same problem with another time step or periodic cell (`run.py --beta B` or `--domain
-L1 L3`; stores in out/tpv5/beta*/ and out/tpv5/domain*/), next to the main cell's run at the
-same dx and the builder's beta (variant / main; differences from MDSBI as in the acceptance
-table, the rupture time also as the interpolated 1 mm/s crossing):
+The same problem with another time step, scheme or periodic cell (`run.py --beta B`,
+`--formulation product [--beta B]` or `--domain L1 L3`; stores in out/tpv5/beta*/,
+out/tpv5/product*/ and out/tpv5/domain*/), next to the main cell's run at the same dx with
+the builder's scheme ({FORMULATION}) and beta (variant / main; differences from MDSBI as in the
+acceptance table, the rupture time also as the interpolated 1 mm/s crossing):
 
 | station | dx | variant | rupture time (s) | interpolated (s) | final slip (%) | peak slip rate (%) | final stress (MPa) | steps | wall time (min) |
 |---|---|---|---|---|---|---|---|---|---|
@@ -556,19 +561,25 @@ quantity between the builder's cell and the other one (cracklab against cracklab
     if res.get("lag"):
         lrows = []
         beta_now = res["baselines"]["runs"][f"{C.ACCEPT_DX:g}"]["beta"]
+        p = next(iter(res["lag"].values()))["order"]
+        bp = "beta" if p == 1 else f"beta^{p}"
+        scheme = ("the product scheme is first order in dt" if p == 1 else
+                  f"{res['baselines']['runs'][f'{C.ACCEPT_DX:g}']['formulation']} is second order in dt")
         for s, f in res["lag"].items():
             pairs = ", ".join(f"{b:.4f}: {1e3 * x:+.1f} ms" for b, x in zip(f["betas"], f["lags"]))
             within = ("any beta" if f["beta_within"] == float("inf") else
-                      "none" if f["beta_within"] == 0 else f"{f['beta_within']:.3f}")
-            lrows.append(f"| {s} | {pairs} | {1e3 * f['a']:+.1f} ms | {1e3 * f['b'] * beta_now:+.1f} ms | {within} |")
+                      "none" if f["beta_within"] == 0 else
+                      f"> {BETA_SHOWN:g}" if f["beta_within"] > BETA_SHOWN else f"{f['beta_within']:.3f}")
+            lrows.append(f"| {s} | {pairs} | {1e3 * f['a']:+.1f} ms | {1e3 * f['b'] * beta_now ** p:+.1f} ms | "
+                         f"{within} |")
         text += f"""
 The rupture-time lag (interpolated crossing, cracklab minus MDSBI) against beta at 100 m,
-fitted as lag = a + b beta (the product scheme is first order in dt; `compare.lag_fit`):
-a is what is left at dt -> 0 (the grid's share and the reference's own error), b x {beta_now:g}
+fitted as lag = a + b {bp} ({scheme}; `compare.lag_fit`):
+a is what is left at dt -> 0 (the grid's share and the reference's own error), b x {beta_now:g}{'' if p == 1 else f'^{p}'}
 the time step's share at the builder's beta, and the last column the largest beta whose
 fitted lag is within {C.TOL_RUPTURE_TIME:g} s:
 
-| station | lag at beta | a (dt -> 0) | b x {beta_now:g} | beta within {C.TOL_RUPTURE_TIME:g} s |
+| station | lag at beta | a (dt -> 0) | b x {beta_now:g}{'' if p == 1 else f'^{p}'} | beta within {C.TOL_RUPTURE_TIME:g} s |
 |---|---|---|---|---|
 {chr(10).join(lrows)}
 """
@@ -586,7 +597,8 @@ def _check_commands(res):
         for key in sorted(v["runs"], key=float, reverse=True):
             m = v["runs"][key]
             opt = (f"--beta {m['beta']:g}" if name.startswith("beta") else
-                   f"--domain {m['domain'][0]:g} {m['domain'][1]:g}")
+                   f"--formulation {m['formulation']}" + (f" --beta {m['beta']:g}" if "_beta" in name else "")
+                   if name.startswith("product") else f"--domain {m['domain'][0]:g} {m['domain'][1]:g}")
             cmds.append(f"`run.py --dx {key} {opt}`")
     if res.get("step_cost"):
         cmds.append("`run.py --step-cost " + " ".join(res["step_cost"]["median_ms"]) + "`")
@@ -630,7 +642,8 @@ in units of 100 m). All comparisons use the strike (h) components.
 
 Wall times on the project's 2-core machine shared with other jobs (not a
 benchmark). Time stepping: `Numerics(formulation="{FORMULATION}", engine="{ENGINE}")` (the
-product scheme, tpv5's default) at the builder's beta, default thread counts.
+product scheme with the law at the step's mean velocity, second order in dt: tpv5's
+default) at the builder's beta, default thread counts.
 
 ## Acceptance
 
@@ -786,6 +799,7 @@ def page_numbers(res, dxs):
                        if max(abs(x) for x in big) < 0.5 * max(abs(x) for x in main) else
                        ": the replicas do not explain it."))
     d["cell"], d["timestep"] = _variant_sentences(res)
+    d["scheme"] = _scheme_sentence(res)
     return d
 
 
@@ -800,7 +814,7 @@ def _variant_sentences(res):
                          f"the rupture times by at most {m['rupture_time']:.3f} s, the final slip by "
                          f"{100 * m['final_slip']:.2f} %, the peak slip rate by {100 * m['peak_rate']:.2f} % and "
                          f"the final stress by {m['final_stress']:.2f} MPa")
-        cell = "Against the builder's cell, " + "; ".join(parts) + " (tables in \"Time-step and cell checks\")."
+        cell = "Against the builder's cell, " + "; ".join(parts) + " (tables in \"Time-step, scheme and cell checks\")."
         for name, v in res.get("variants", {}).items():
             key100 = f"{C.ACCEPT_DX:g}"
             if name.startswith("domain") and key100 in v["runs"]:
@@ -818,13 +832,20 @@ def _variant_sentences(res):
         others = [v["runs"][key100] for name, v in res["variants"].items()
                   if name.startswith("beta") and key100 in v["runs"]]
         a = max(abs(f["a"]) for f in lag.values())
-        share = max(abs(f["b"]) * f["beta_now"] for f in lag.values())
+        share = max(abs(f["b"]) * f["beta_now"] ** f["order"] for f in lag.values())
         within = min(f["beta_within"] for f in lag.values())
         base_meta = res["baselines"]["runs"][key100]
-        timestep = (f"The product scheme is first order in dt. Fitted over beta, the lag left at dt -> 0 is at "
+        order = next(iter(lag.values()))["order"]
+        timestep = ((f"{base_meta['formulation']} is second order in dt. Fitted over beta^2" if order == 2 else
+                     f"{base_meta['formulation']} is first order in dt. Fitted over beta")
+                    + f", the lag left at dt -> 0 is at "
                     f"most {1e3 * a:.0f} ms and the time step's share at the builder's beta = {base_meta['beta']:g} "
-                    f"at most {1e3 * share:.0f} ms (table \"Time-step and cell checks\")"
+                    f"at most {1e3 * share:.0f} ms (table \"Time-step, scheme and cell checks\")"
                     + (": the lag is the time step's." if a < 0.2 * share else "."))
+        if a < SCATTER and share < SCATTER:
+            timestep += (f" Both are within the {1e3 * SCATTER:.0f} ms by which the 1 mm/s crossing scatters about "
+                         f"its limit (docs/stability.md, \"The order of a rupture front\"): the fit resolves "
+                         f"neither, and its largest beta within 0.05 s is an extrapolation.")
         if within == float("inf") or within >= base_meta["beta"]:
             timestep += " The builder's beta already holds the 0.05 s limit at every station."
         elif within == 0:
@@ -835,7 +856,7 @@ def _variant_sentences(res):
             timestep += (f" On the interpolated crossings, beta = {within:.3f} would bring every station within "
                          f"0.05 s: {factor:.2f} times the steps of the builder's beta.")
         for m in others:
-            accepted = [v for v in res["variants"].values() if key100 in v["runs"] and
+            accepted = [v for n, v in res["variants"].items() if n.startswith("beta") and key100 in v["runs"] and
                         v["runs"][key100]["beta"] == m["beta"]][0]["acceptance"]
             missed = [f for f in accepted["failures"] if f.split(":")[0].endswith(f" at {key100} m")]
             timestep += (f" The run at beta = {m['beta']:g} ({m['nsteps']} steps, "
@@ -860,9 +881,39 @@ def _variant_sentences(res):
             timestep += (" The wall times of these runs, taken under different loads of the shared host, do not "
                          "measure the cost of a step (`run.py --step-cost` does).")
     else:
-        timestep = ("The product scheme is first order in dt; `run.py --beta B` runs the same problem at another "
-                    "time step and adds it to this page.")
+        timestep = ("`run.py --beta B` runs the same problem at another time step and adds it to this page (the "
+                    "lag's fit over beta).")
     return cell, timestep
+
+
+def _lag(c):
+    """cracklab's interpolated 1 mm/s crossing minus MDSBI's (s)."""
+    return c["fine"]["rupture_time_interp"] - c["ref"]["rupture_time_interp"]
+
+
+def _scheme_sentence(res):
+    """What the first-order product scheme (the checks OUT/product*) gives at 100 m next to
+    the main runs' scheme (a sentence for discussion.md)."""
+    key100 = f"{C.ACCEPT_DX:g}"
+    checks = [(n, v) for n, v in res.get("variants", {}).items() if n.startswith("product") and key100 in v["runs"]]
+    main = res["runs"][key100]
+    if not checks:
+        return ("The first-order product scheme (`run.py --formulation product [--beta B]`) is not in this version "
+                "of the page.")
+    worst_main = max(_lag(res["stations"][s][key100]) for s in REF_STATIONS)
+    parts = []
+    for _, v in sorted(checks, key=lambda nv: -nv[1]["runs"][key100]["beta"]):
+        meta = v["runs"][key100]
+        lags = [_lag(v["stations"][s][key100]) for s in REF_STATIONS]
+        missed = [f for f in v["acceptance"]["failures"] if f" at {key100} m" in f.split(":")[0]]
+        n = sum(1 for r in v["acceptance"]["checks"] if r["dx"] == C.ACCEPT_DX)
+        parts.append(f"at beta = {meta['beta']:g} ({meta['nsteps']} steps) the interpolated crossings lag by up "
+                     f"to {max(lags):+.4f} s and the run "
+                     + (f"meets all {n} acceptance numbers" if not missed else
+                        f"misses {len(missed)} of the {n} acceptance numbers"))
+    return (f"With the first-order product scheme (`run.py --formulation product`, table \"Time-step, scheme and "
+            f"cell checks\"), " + "; ".join(parts) + f"; with {main['formulation']} at beta = {main['beta']:g} "
+            f"({main['nsteps']} steps) the largest lag is {worst_main:+.4f} s.")
 
 
 def report(res, dxs):
@@ -908,9 +959,10 @@ def main(argv=None) -> int:
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
                    help="periodic length along strike and half-plane depth in m instead of 48000 24000: "
                         "a check into OUT/domain<L1>x<L3>km, no page")
-    p.add_argument("--formulation", default=None, choices=("product2",),
-                   help="time stepping instead of tpv5's product scheme: 'product2' (the law at the step's mean "
-                        "velocity), with --beta or at the builder's, a check into OUT/product2[_beta<B>], no page")
+    p.add_argument("--formulation", default=None, choices=("product",),
+                   help=f"time stepping instead of tpv5's {FORMULATION}: 'product' (first order: the law's slip path "
+                        "by the rectangle rule), with --beta or at the builder's, a check into "
+                        "OUT/product[_beta<B>], no page")
     p.add_argument("--step-cost", type=float, nargs="+", default=None, metavar="BETA",
                    help="measure the cost of a 100 m step at these betas in one sitting (alternated) into "
                         "OUT/step_cost.json, no page")

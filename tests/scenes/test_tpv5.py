@@ -31,7 +31,7 @@ def test_tpv5_grid_is_the_half_plane_below_the_surface(dx):
     assert g.dx1 == g.dx3 == dx
     assert sc.loading.tau0_1.shape == g.shape and sc.law.bonded.shape == g.shape
     assert sc.units == {"length": "m", "time": "s", "stress": "Pa"}
-    assert sc.t_end == 0.1 and sc.beta == 0.09
+    assert sc.t_end == 0.1 and sc.beta == 0.125 and sc.formulation == "product2"
     mat = sc.material
     assert mat.cs == 3464.0 and mat.nu == 0.25 and mat.mu / mat.cs**2 == pytest.approx(2670.0)
     law = sc.law

@@ -241,3 +241,16 @@ def test_study_reports_fail_and_exits_nonzero_on_a_perturbed_run():
         assert ("FAIL" in line) == bool(expect)
         if expect:
             assert "faultst075dp000 at 100 m: rupture time" in line
+
+
+def test_the_main_runs_are_the_builders_default_time_stepping():
+    """A plain `run.py` runs scenes.tpv3 as the builder steps it without numerics
+    (product2 at beta 0.125); `--formulation product` is the first-order check."""
+    run = _load("run")
+    from cracklab.scenes import tpv3
+
+    main, builder = run.build_scene(1000.0, 0.5), tpv3(dx=1000.0, t_end=0.5)
+    assert main.formulation == builder.formulation == "product2"
+    assert main.beta == builder.beta == 0.125 and main.dt == builder.dt
+    first = run.build_scene(1000.0, 0.5, formulation="product")
+    assert first.formulation == "product" and first.beta == 0.125

@@ -100,6 +100,23 @@ def test_lag_fit_recovers_a_linear_lag_and_what_it_costs():
             C.lag_fit(betas, lags)
 
 
+def test_lag_fit_of_a_second_order_scheme():
+    """order=2 fits lag = a + b beta^2 (product2, ORDER): exact on a quadratic lag, where the
+    linear fit of the same two points would put the dt -> 0 lag elsewhere."""
+    assert C.ORDER == {"product": 1, "product2": 2}
+    # lag = 2 ms + 2.56 s x beta^2: 42 ms at 0.125, 12 ms at 0.0625; within 50 ms for beta^2 <= 0.048 / 2.56
+    betas, lags = [0.125, 0.0625], [0.002 + 2.56 * 0.125**2, 0.002 + 2.56 * 0.0625**2]
+    f = C.lag_fit(betas, lags, order=2)
+    assert f["order"] == 2 and f["a"] == pytest.approx(0.002) and f["b"] == pytest.approx(2.56)
+    assert f["beta_within"] == pytest.approx(math.sqrt(0.048 / 2.56)) and f["steps_factor"] == 1.0
+    assert C.lag_fit(betas, lags)["a"] == pytest.approx(0.002 - 2.56 * 0.125 * 0.0625)   # the linear fit's
+    over = C.lag_fit([0.25, 0.125], [0.002 + 2.56 * 0.0625, 0.002 + 2.56 * 0.125**2], order=2)
+    assert over["beta_within"] == pytest.approx(math.sqrt(0.048 / 2.56))
+    assert over["steps_factor"] == pytest.approx(0.25 / math.sqrt(0.048 / 2.56))
+    with pytest.raises(ValueError):
+        C.lag_fit(betas, lags, order=3)
+
+
 def test_domain_change_is_the_largest_move_over_stations():
     a = {s: _cmp(s) for s in ("faultst000dp000", "faultst075dp075")}
     b = {"faultst000dp000": _cmp("faultst000dp000", shift=0.02, slip_scale=1.01),
@@ -143,7 +160,7 @@ def test_study_path_from_stations_to_verdict_page_and_exit_status(tmp_path):
     refs = {s: C.load_reference(s) for s in run.REF_STATIONS}
     meta = {"dx": 100.0, "t_end": 12.0, "n1": 480, "n3": 240, "shape": [480, 241], "beta": 0.125,
             "dt": 3.6e-3, "nsteps": 3326, "wall_s": 300.0, "domain": [48000.0, 24000.0], "s_per_step": 0.09,
-            "formulation": "product", "engine": "exponential", "ruptured_fraction": 1.0,
+            "formulation": "product2", "engine": "exponential", "ruptured_fraction": 1.0,
             "surface_rupture_time": 4.5}
     for perturb, expect in (({}, 0), ({"shift": 0.1}, 1)):
         cmp = run.compare_run(_dataset(**perturb), refs)
@@ -164,3 +181,52 @@ def test_study_path_from_stations_to_verdict_page_and_exit_status(tmp_path):
         assert ("At 100 m the five stations meet all three acceptance numbers" in text) == (not expect)
     assert run.exit_status({"runs": {"600": {}}, "acceptance": C.check_acceptance({})}) == 0
     assert run.exit_status({"runs": {"100": {}}, "acceptance": C.check_acceptance({})}) == 2
+
+
+def test_the_main_runs_are_the_builders_default_time_stepping():
+    """A plain `run.py` runs scenes.tpv5 as the builder steps it without numerics
+    (product2 at beta 0.125, as tpv3); `--formulation product` is the first-order check."""
+    from cracklab.scenes import tpv5
+
+    main, builder = run.build_scene(1000.0, 0.5), tpv5(dx=1000.0, t_end=0.5)
+    assert main.formulation == builder.formulation == "product2"
+    assert main.beta == builder.beta == 0.125 and main.dt == builder.dt
+    first = run.build_scene(1000.0, 0.5, formulation="product")
+    assert first.formulation == "product" and first.beta == 0.125
+
+
+def test_scheme_check_and_second_order_lag_fit_on_the_page(tmp_path):
+    """A first-order check (OUT/product) 0.06 s late at one station is reported as missing
+    one of the 15 numbers next to the main run; beta checks of a product2 main run are
+    fitted at order 2 (lag = a + b beta^2), so a lag of 30 ms at beta 0.125 and 7.5 ms at
+    0.0625 is all time step (a = 0)."""
+    refs = {s: C.load_reference(s) for s in run.REF_STATIONS}
+    meta = {"dx": 100.0, "t_end": 12.0, "n1": 480, "n3": 240, "shape": [480, 241], "beta": 0.125,
+            "dt": 3.6e-3, "nsteps": 3326, "wall_s": 300.0, "domain": [48000.0, 24000.0], "s_per_step": 0.09,
+            "formulation": "product2", "engine": "exponential", "ruptured_fraction": 1.0,
+            "surface_rupture_time": 4.5}
+
+    def analysed(shift, **extra):
+        cmp = run.compare_run(_dataset(shift=shift) if shift else _dataset(), refs)
+        r = {"runs": {"100": {**meta, **extra}}, "stations": {s: {"100": c} for s, c in cmp.items()}}
+        r["acceptance"] = C.check_acceptance(r["stations"])
+        return r
+
+    res = analysed(0.03)
+    res["variants"] = {"product": analysed(0.06, formulation="product"),
+                       "beta0.0625": analysed(0.0075, beta=0.0625, nsteps=6652)}
+    res["baselines"] = {"runs": res["runs"], "stations": res["stations"]}
+    s = "faultst-075dp075"
+    lags = [run._lag(res["stations"][s]["100"]), run._lag(res["variants"]["beta0.0625"]["stations"][s]["100"])]
+    lag = {s: {**C.lag_fit([0.125, 0.0625], lags, beta_now=0.125, order=C.ORDER["product2"]),
+               "betas": [0.125, 0.0625], "lags": lags}}
+    assert lag[s]["order"] == 2 and abs(lag[s]["a"]) < 2e-3 and lag[s]["b"] * 0.125**2 == pytest.approx(0.03, abs=2e-3)
+    res["lag"] = lag
+    sentence = run._scheme_sentence(res)
+    assert "first-order product scheme" in sentence and "misses 1 of the 15" in sentence
+    assert "with product2 at beta = 0.125" in sentence
+    text = run._variant_section(res)
+    assert "| product, beta 0.1250, 48 km x 24 km |" in text and "lag = a + b beta^2" in text
+    page = Path(run.write_page(res, [100.0], tmp_path / "tpv5.md", "figures")).read_text()
+    assert "{" not in page and "}" not in page and "product2 is second order in dt. Fitted over beta^2" in page
+    assert "`run.py --dx 100 --formulation product`" in page and "`run.py --dx 100 --beta 0.0625`" in page
