@@ -321,10 +321,9 @@ def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S
 _BIM_BLOCK = 256
 
 
-def _bim_predict_loop(V, S, e0, v0, dk, st, pre, K, sign, dt, wp, wm, c, s, nrm, H, f, O1, O2, O3):
+def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, K, sign, dt, H, f):
     # blocks of modes: within one, a loop per channel over a few rows (the hardware prefetches
     # a handful of streams, not the sixty rows of a pass that takes every channel per mode)
-    M = c.size
     F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
     for b0 in range(0, M, _BIM_BLOCK):
         b1 = min(M, b0 + _BIM_BLOCK)
@@ -347,15 +346,6 @@ def _bim_predict_loop(V, S, e0, v0, dk, st, pre, K, sign, dt, wp, wm, c, s, nrm,
                 f[a, 0, i] = sg * F[0, i - b0] + complex(-F2.imag, F2.real)
                 f[a, 1, i] = sg * F[1, i - b0] - complex(-F3.imag, F3.real)
                 f[a, 2, i] = sg * F[4, i - b0]
-        for i in range(b0, b1):
-            FL = wp[0, i] * f[0, 0, i] + wm[0, i] * f[1, 0, i]
-            FN = wp[1, i] * f[0, 1, i] + wm[1, i] * f[1, 1, i]
-            FT = wp[2, i] * f[0, 2, i] + wm[2, i] * f[1, 2, i]
-            cc = c[i]
-            ss = -s[i]
-            O1[i] = (cc * FL + ss * FT) * nrm
-            O3[i] = (cc * FT - ss * FL) * nrm
-            O2[i] = FN * nrm
 
 
 def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
@@ -372,20 +362,9 @@ def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
             v[1, k, i] = p - Vk
 
 
-def _bim_correct_loop(X1, X2, X3, c, s, f, em, den, H, K, sign, wp, wm, nrm, O1, O2, O3, v):
-    """``v``: work rows (2, 3, M) for the faces' velocities of the split."""
-    for k in range(3):   # the split, as _bim_settle_loop
-        for i in range(c.size):
-            if k == 0:
-                Vk = c[i] * X1[i] + s[i] * X3[i]
-            elif k == 1:
-                Vk = X2[i]
-            else:
-                Vk = c[i] * X3[i] - s[i] * X1[i]
-            p = ((f[0, k, i] - f[1, k, i]) + em[k, i] * Vk) / den[k, i]
-            v[0, k, i] = p
-            v[1, k, i] = p - Vk
-    M = c.size
+def _bim_correct_loop(M, H, K, sign, v, f):
+    """The faces' f = H + K v (modes 0 .. M-1) for their velocities ``v`` of the split
+    (_bim_settle_loop)."""
     F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
     for b0 in range(0, M, _BIM_BLOCK):
         b1 = min(M, b0 + _BIM_BLOCK)
@@ -401,15 +380,19 @@ def _bim_correct_loop(X1, X2, X3, c, s, f, em, den, H, K, sign, wp, wm, nrm, O1,
                 f[a, 0, i] = sg * F[0, i - b0] + complex(-F2.imag, F2.real)
                 f[a, 1, i] = sg * F[1, i - b0] - complex(-F3.imag, F3.real)
                 f[a, 2, i] = sg * F[4, i - b0]
-        for i in range(b0, b1):
-            FL = wp[0, i] * f[0, 0, i] + wm[0, i] * f[1, 0, i]
-            FN = wp[1, i] * f[0, 1, i] + wm[1, i] * f[1, 1, i]
-            FT = wp[2, i] * f[0, 2, i] + wm[2, i] * f[1, 2, i]
-            cc = c[i]
-            ss = -s[i]
-            O1[i] = (cc * FL + ss * FT) * nrm
-            O3[i] = (cc * FT - ss * FL) * nrm
-            O2[i] = FN * nrm
+
+
+def _bim_join_loop(f, wp, wm, c, s, nrm, O1, O2, O3):
+    """The interface's F = wp f+ + wm f- per part, back to components, times nrm."""
+    for i in range(c.size):
+        FL = wp[0, i] * f[0, 0, i] + wm[0, i] * f[1, 0, i]
+        FN = wp[1, i] * f[0, 1, i] + wm[1, i] * f[1, 1, i]
+        FT = wp[2, i] * f[0, 2, i] + wm[2, i] * f[1, 2, i]
+        cc = c[i]
+        ss = -s[i]
+        O1[i] = (cc * FL + ss * FT) * nrm
+        O3[i] = (cc * FT - ss * FL) * nrm
+        O2[i] = FN * nrm
 
 
 _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
@@ -419,7 +402,8 @@ _PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "
        "mirror_join": _mirror_join_loop, "mirror_split": _mirror_split_loop,
        "mirror_rotate": _mirror_rotate_loop, "mirror_shear_correct": _mirror_shear_correct_loop,
        "mirror_shear_predict": _mirror_shear_predict_loop, "bim_predict": _bim_predict_loop,
-       "bim_correct": _bim_correct_loop, "bim_settle": _bim_settle_loop}
+       "bim_correct": _bim_correct_loop, "bim_settle": _bim_settle_loop,
+       "bim_join": _bim_join_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):

@@ -101,8 +101,8 @@ class Bimaterial(Interface):
     _CH = ("L", "N", "LN", "NL", "T")
 
     def _compiled_passes(self):
-        """The three compiled passes, or None (no numba, or loops.python_only)."""
-        passes = tuple(_compiled(name) for name in ("bim_predict", "bim_correct", "bim_settle"))
+        """The four compiled passes (predict, correct, settle = the split, join), or None (no numba, or loops.python_only)."""
+        passes = tuple(_compiled(name) for name in ("bim_predict", "bim_correct", "bim_settle", "bim_join"))
         return None if any(p is None for p in passes) else passes
 
     def _bind(self, n):
@@ -184,9 +184,9 @@ class Bimaterial(Interface):
             for ch in chans.values():
                 ch.engine.launch()
         O = B["O"][:, :M]
-        passes[0](B["V"], B["S"], B["e0"], B["v0"], B["dk"], B["st"], B["pre"], B["K"], B["sign"],
-                  float(self.faces[0].dt), B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), B["H"], B["f"],
-                  *O)
+        passes[0](M, B["V"], B["S"], B["e0"], B["v0"], B["dk"], B["st"], B["pre"], B["K"], B["sign"],
+                  float(self.faces[0].dt), B["H"], B["f"])
+        passes[3](B["f"], B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), *O)
         return self._inverse_fused()
 
     @property
@@ -232,8 +232,10 @@ class Bimaterial(Interface):
         if self._fused is not None:
             B = self._fused
             X = self._forward_fused(v_pred)
-            self._compiled_passes()[1](*X, B["c"], B["s"], B["f"], B["em"], B["den"], B["H"], B["K"], B["sign"],
-                                       B["wp"], B["wm"], float(self.fft.norm), *B["O"][:, :B["M"]], B["W"])
+            _, correct, split, join = self._compiled_passes()
+            split(*X, B["c"], B["s"], B["f"], B["em"], B["den"], B["W"])
+            correct(B["M"], B["H"], B["K"], B["sign"], B["W"], B["f"])
+            join(B["f"], B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), *B["O"][:, :B["M"]])
             return self._inverse_fused()
         V = self._rotated(v_pred)
         vs = self._split(V)
