@@ -310,7 +310,6 @@ def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S
                 bottom[h - 1 - k, j] = (g1 - g3).conjugate()
 
 
-
 # -- the bimaterial interface (solver/interfaces/bimaterial.py): both faces' five channels,
 # their combination and the interface's join in one pass per stage.  Arrays per face (first
 # index: 0 top, 1 bottom), then part (L, N, T) or channel (L, N, LN, NL, T; an absent
@@ -321,10 +320,11 @@ def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S
 _BIM_BLOCK = 256
 
 
-def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, K, sign, dt, H, f):
+def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, dt, H):
+    """The predictor's channel updates (modes 0 .. M-1): dknown += dt V, and each channel's
+    running term H; the faces' f then follow from _bim_correct_loop with v = V."""
     # blocks of modes: within one, a loop per channel over a few rows (the hardware prefetches
     # a handful of streams, not the sixty rows of a pass that takes every channel per mode)
-    F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
     for b0 in range(0, M, _BIM_BLOCK):
         b1 = min(M, b0 + _BIM_BLOCK)
         for a in range(2):
@@ -336,16 +336,7 @@ def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, K, sign, dt, H, f):
                 k = 0 if (j == 0 or j == 3) else (2 if j == 4 else 1)
                 je = 2 if j == 3 else j
                 for i in range(b0, b1):
-                    h = st[a, j, i] * dk[a, k, i] + pre[a, j, i] * (S[a, j, i] + e0[a, je, i] * v0[a, k, i])
-                    H[a, j, i] = h
-                    F[j, i - b0] = h + K[a, j, i] * V[a, k, i]
-            sg = sign[a]
-            for i in range(b0, b1):
-                F2 = F[2, i - b0]
-                F3 = F[3, i - b0]
-                f[a, 0, i] = sg * F[0, i - b0] + complex(-F2.imag, F2.real)
-                f[a, 1, i] = sg * F[1, i - b0] - complex(-F3.imag, F3.real)
-                f[a, 2, i] = sg * F[4, i - b0]
+                    H[a, j, i] = st[a, j, i] * dk[a, k, i] + pre[a, j, i] * (S[a, j, i] + e0[a, je, i] * v0[a, k, i])
 
 
 def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
@@ -363,8 +354,8 @@ def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
 
 
 def _bim_correct_loop(M, H, K, sign, v, f):
-    """The faces' f = H + K v (modes 0 .. M-1) for their velocities ``v`` of the split
-    (_bim_settle_loop)."""
+    """The faces' f = H + K v (modes 0 .. M-1) for their velocities ``v``: the predictor's V,
+    or the split's (_bim_settle_loop) in the corrector."""
     F = np.empty((5, _BIM_BLOCK), dtype=np.complex128)
     for b0 in range(0, M, _BIM_BLOCK):
         b1 = min(M, b0 + _BIM_BLOCK)

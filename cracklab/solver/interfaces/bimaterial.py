@@ -16,9 +16,9 @@ The in-plane channels (L, N and their coupling) run whenever an in-plane compone
 active: the faces' normal and tangential motions are coupled even where the jump of one
 of them is held at zero (an inactive component has V = 0).
 
-With numba each stage is one compiled pass over the modes (solver/loops.py, ``bim_*``):
-the predictor's ten channel updates, the faces' f and the join; the corrector's split, the
-faces' f and the join; the split after the step. The faces' velocities, running terms and
+With numba each stage runs compiled passes over the modes (solver/loops.py, ``bim_*``):
+the predictor's ten channel updates, then the faces' f and the join; the corrector's split,
+then the faces' f and the join (the same two passes); the split after the step. The faces' velocities, running terms and
 f then live in arrays per face and part (or channel), and the channels' attributes are
 views of them. The two coupling channels of a face (LN, NL) share kernel and time steps,
 hence their start-up weight E_0(n), computed once. Without numba (or
@@ -101,7 +101,8 @@ class Bimaterial(Interface):
     _CH = ("L", "N", "LN", "NL", "T")
 
     def _compiled_passes(self):
-        """The four compiled passes (predict, correct, settle = the split, join), or None (no numba, or loops.python_only)."""
+        """The four compiled passes (the predictor's channel updates, the faces' f, the split,
+        the join), or None (no numba, or loops.python_only)."""
         passes = tuple(_compiled(name) for name in ("bim_predict", "bim_correct", "bim_settle", "bim_join"))
         return None if any(p is None for p in passes) else passes
 
@@ -184,9 +185,10 @@ class Bimaterial(Interface):
             for ch in chans.values():
                 ch.engine.launch()
         O = B["O"][:, :M]
-        passes[0](M, B["V"], B["S"], B["e0"], B["v0"], B["dk"], B["st"], B["pre"], B["K"], B["sign"],
-                  float(self.faces[0].dt), B["H"], B["f"])
-        passes[3](B["f"], B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), *O)
+        predict, faces_f, _, join = passes
+        predict(M, B["V"], B["S"], B["e0"], B["v0"], B["dk"], B["st"], B["pre"], float(self.faces[0].dt), B["H"])
+        faces_f(M, B["H"], B["K"], B["sign"], B["V"], B["f"])
+        join(B["f"], B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), *O)
         return self._inverse_fused()
 
     @property
@@ -232,9 +234,9 @@ class Bimaterial(Interface):
         if self._fused is not None:
             B = self._fused
             X = self._forward_fused(v_pred)
-            _, correct, split, join = self._compiled_passes()
+            _, faces_f, split, join = self._compiled_passes()
             split(*X, B["c"], B["s"], B["f"], B["em"], B["den"], B["W"])
-            correct(B["M"], B["H"], B["K"], B["sign"], B["W"], B["f"])
+            faces_f(B["M"], B["H"], B["K"], B["sign"], B["W"], B["f"])
             join(B["f"], B["wp"], B["wm"], B["c"], B["s"], float(self.fft.norm), *B["O"][:, :B["M"]])
             return self._inverse_fused()
         V = self._rotated(v_pred)
