@@ -705,10 +705,11 @@ def surface_numbers(sur) -> dict:
         for k, r in runs.items():
             for n, c in r.items():
                 strike, z = n[2:].split("_z")
+                strike = strike.replace("-", "m").replace("+", "")
                 depth = "below" if 0 < float(z) < 400 else z
-                d[f"s{strike.replace('-', 'm').replace('+', '')}_{depth}_{label}_{k}"] = f"{c['peak']:.1f}"
+                d[f"s{strike}_{depth}_{label}_{k}"] = f"{c['peak']:.1f}"
                 if depth == "0":
-                    d[f"rt{strike.replace('-', 'm').replace('+', '')}_{label}_{k}"] = f"{c['rupture_time']:.3f}"
+                    d[f"rt{strike}_{label}_{k}"] = f"{c['rupture_time']:.3f}"
     for pair, by in sur.get("analogue", {}).items():
         for k, r in by.items():
             for where, c in r.items():

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import json
 import sys
 import time
@@ -63,8 +64,10 @@ def _stations(grid, xc):
     return {f"st{s:+d}_z{d:g}": (xc + 1000.0 * s, d) for s in STRIKES_KM for d in depths}
 
 
+@functools.lru_cache(maxsize=None)
 def _compare():
-    """studies/tpv6/compare.py by its path (another study's compare may be imported)."""
+    """studies/tpv6/compare.py by its path (another study's compare may be imported), loaded
+    once."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("tpv6_surface_compare", HERE / "compare.py")
@@ -103,16 +106,24 @@ def run_3d(dx, t_end, constant_normal):
     return out, time.time() - t0
 
 
+def _plane_fault(L, dx):
+    """The 2D analogues' plane grid of a periodic fault of length L and TPV6's shear
+    traction on it: 70 MPa, 81.6 MPa on the 3 km nucleation patch at its centre."""
+    from cracklab import Grid
+
+    g = Grid(n1=int(round(L / dx)), n3=1, L1=L, L3=1.0)
+    return g, np.where(np.abs(g.x1 - L / 2) <= 1500.0, 81.6e6, 70.0e6)[:, None]
+
+
 def scene_2d(dx, pair, t_end=8.0):
     """The plane anti-plane analogue: TPV6's stresses and friction (constant sigma_n) on a
     30 km periodic fault, the 3 km nucleation patch at its centre."""
-    from cracklab import Grid, Loading, Material, Numerics, Record, Scene
+    from cracklab import Loading, Material, Numerics, Record, Scene
     from cracklab.laws import SlipWeakening
     from cracklab.scenes import TPV6_FAR, TPV6_NEAR
 
     L = 30000.0
-    g = Grid(n1=int(round(L / dx)), n3=1, L1=L, L3=1.0)
-    tau = np.where(np.abs(g.x1 - L / 2) <= 1500.0, 81.6e6, 70.0e6)[:, None]
+    g, tau = _plane_fault(L, dx)
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=SIGMA_N)
     sides = {"rock": {"material": TPV6_NEAR},
              "tpv6": {"materials": (TPV6_FAR, TPV6_NEAR)},
@@ -136,13 +147,12 @@ def scene_inplane(dx, slip_scale=None, t_end=6.0):
     traction (regularised with ``slip_scale`` L* when given), 70 MPa shear and 120 MPa
     compression on a 60 km periodic fault, the 3 km nucleation patch (81.6 MPa) at its centre;
     the builder's time stepping (product2, beta 0.125)."""
-    from cracklab import Grid, Loading, Numerics, Record, Scene
+    from cracklab import Loading, Numerics, Record, Scene
     from cracklab.laws import SlipWeakening
     from cracklab.scenes import TPV6_FAR, TPV6_NEAR
 
     L = 60000.0
-    g = Grid(n1=int(round(L / dx)), n3=1, L1=L, L3=1.0)
-    tau = np.where(np.abs(g.x1 - L / 2) <= 1500.0, 81.6e6, 70.0e6)[:, None]
+    g, tau = _plane_fault(L, dx)
     extra = {} if slip_scale is None else {"normal_slip_scale": slip_scale}
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, **extra)
     stations = {f"{s:+d}": (L / 2 + 1000.0 * s, 0.0) for s in INPLANE_KM}
