@@ -64,10 +64,6 @@ def load_reference(station: str, directory=None) -> dict:
     return _C3.load_reference(station, directory or default_reference_dir())
 
 
-#: the order in dt of each scheme's rupture time (docs/stability.md, "The order of a rupture front")
-ORDER = {"product": 1, "product2": 2}
-
-
 def lag_fit(betas, lags, *, limit=TOL_RUPTURE_TIME, beta_now=None, order=1) -> dict:
     """Fit lag(beta) = a + b beta^p (least squares, p = ``order``) to rupture-time lags (s)
     measured at the time-step factors ``betas`` (at least two different ones): the lag of

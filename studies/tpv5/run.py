@@ -255,6 +255,8 @@ def add_variants(res, main_out, ref_dir=None):
     key = f"{C.ACCEPT_DX:g}"
     betas = {name: v for name, v in res["variants"].items() if name.startswith("beta") and key in v["runs"]}
     if betas and key in res["baselines"]["runs"]:
+        from cracklab.solver.schemes import SCHEMES
+
         res["lag"] = {}
         base = res["baselines"]
         for s in REF_STATIONS:
@@ -262,7 +264,7 @@ def add_variants(res, main_out, ref_dir=None):
             cs = [base["stations"][s][key]] + [v["stations"][s][key] for v in betas.values()]
             lags = [c["fine"]["rupture_time_interp"] - c["ref"]["rupture_time_interp"] for c in cs]
             fit = C.lag_fit(bs, lags, beta_now=base["runs"][key]["beta"],
-                            order=C.ORDER.get(base["runs"][key]["formulation"], 1))
+                            order=SCHEMES[base["runs"][key]["formulation"]].front_order)
             fit["betas"], fit["lags"] = bs, lags
             fit["sampled"] = [c["diff"]["rupture_time"] for c in cs]
             res["lag"][s] = fit

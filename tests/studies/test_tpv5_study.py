@@ -12,6 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cracklab.solver.schemes import SCHEMES
+
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "studies" / "tpv5"
 
@@ -101,9 +103,9 @@ def test_lag_fit_recovers_a_linear_lag_and_what_it_costs():
 
 
 def test_lag_fit_of_a_second_order_scheme():
-    """order=2 fits lag = a + b beta^2 (product2, ORDER): exact on a quadratic lag, where the
+    """order=2 fits lag = a + b beta^2 (product2's front_order): exact on a quadratic lag, where the
     linear fit of the same two points would put the dt -> 0 lag elsewhere."""
-    assert C.ORDER == {"product": 1, "product2": 2}
+    assert (SCHEMES["product"].front_order, SCHEMES["product2"].front_order) == (1, 2)
     # lag = 2 ms + 2.56 s x beta^2: 42 ms at 0.125, 12 ms at 0.0625; within 50 ms for beta^2 <= 0.048 / 2.56
     betas, lags = [0.125, 0.0625], [0.002 + 2.56 * 0.125**2, 0.002 + 2.56 * 0.0625**2]
     f = C.lag_fit(betas, lags, order=2)
@@ -218,7 +220,7 @@ def test_scheme_check_and_second_order_lag_fit_on_the_page(tmp_path):
     res["baselines"] = {"runs": res["runs"], "stations": res["stations"]}
     s = "faultst-075dp075"
     lags = [run._lag(res["stations"][s]["100"]), run._lag(res["variants"]["beta0.0625"]["stations"][s]["100"])]
-    lag = {s: {**C.lag_fit([0.125, 0.0625], lags, beta_now=0.125, order=C.ORDER["product2"]),
+    lag = {s: {**C.lag_fit([0.125, 0.0625], lags, beta_now=0.125, order=SCHEMES["product2"].front_order),
                "betas": [0.125, 0.0625], "lags": lags}}
     assert lag[s]["order"] == 2 and abs(lag[s]["a"]) < 2e-3 and lag[s]["b"] * 0.125**2 == pytest.approx(0.03, abs=2e-3)
     res["lag"] = lag

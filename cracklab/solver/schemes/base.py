@@ -45,5 +45,13 @@ class Scheme:
     mean_velocity = False  # it updates the law at the step's mean velocity: the Stepper gives it
                            # arrays of the grid for it (run.vmean) and for trial slips (run.work)
 
+    @property
+    def front_order(self) -> int:
+        """The order in dt of a slip-weakening front's rupture time: 2 where the law is
+        updated at the step's mean velocity (its slip path by the trapezoid rule), 1 where it
+        is updated with v_{n-1} (the rectangle rule; docs/stability.md, "The order of a
+        rupture front")."""
+        return 2 if self.mean_velocity else 1
+
     def finish(self, run, n, v_new):
         """After step (v): nothing to update by default."""
