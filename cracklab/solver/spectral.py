@@ -21,15 +21,16 @@ one transform of the doubled cell, i.e. about what the two transforms of the per
 n1 x n3 grid cost; a lone even field costs the doubled cell's transform too).
 
 Backends: pyfftw when it is installed (plans made once per grid with FFTW_MEASURE,
-wisdom cached per host under the user cache directory), otherwise scipy.fft.
+wisdom cached per host under the user cache directory as FFTW's own text, in a JSON file:
+nothing read from the cache is unpickled), otherwise scipy.fft.
 Choose with the environment variable CRACKLAB_FFT=pyfftw|scipy; threads with
 ``workers`` or CRACKLAB_FFT_THREADS.
 """
 from __future__ import annotations
 
 import contextlib
+import json
 import os
-import pickle
 import socket
 import tempfile
 from pathlib import Path
@@ -52,19 +53,50 @@ def cache_dir() -> Path:
     return Path(root)
 
 
+#: the wisdom file's format tag, and its largest accepted size (FFTW's wisdom of every size a
+#: run plans is a few kB; anything far larger is not a file this module wrote)
+WISDOM_FORMAT = "cracklab-fftw-wisdom/1"
+WISDOM_MAX_BYTES = 16 * 2**20
+#: pyfftw's wisdom is a tuple of FFTW's exported text, one per precision, in this order
+_PRECISIONS = ("double", "single", "long double")
+
+
 def _wisdom_path() -> Path:
-    return cache_dir() / f"fftw-wisdom-{socket.gethostname()}.pickle"
+    return cache_dir() / f"fftw-wisdom-{socket.gethostname()}.json"
+
+
+def wisdom_to_json(wisdom) -> str:
+    """pyfftw's wisdom (FFTW's exported text per precision, as bytes) as a JSON document."""
+    return json.dumps({"format": WISDOM_FORMAT,
+                       **{k: w.decode("ascii") for k, w in zip(_PRECISIONS, wisdom)}})
+
+
+def wisdom_from_json(text: str):
+    """The wisdom tuple of a document of :func:`wisdom_to_json`; ValueError if it is not one.
+    Only data is read: FFTW's own parser then reads each text (pyfftw.import_wisdom)."""
+    doc = json.loads(text)
+    if not isinstance(doc, dict) or doc.get("format") != WISDOM_FORMAT:
+        raise ValueError("not a cracklab FFTW wisdom file")
+    parts = [doc.get(k) for k in _PRECISIONS]
+    if not all(isinstance(p, str) for p in parts):
+        raise ValueError("wisdom file: a precision's text is missing")
+    return tuple(p.encode("ascii") for p in parts)
 
 
 def _load_wisdom():
     """Make the host's wisdom file the process's wisdom (when it can be read): every plan is
     then the one the file holds for its size, whichever process measured it first, so that
     a run and its resumption in another process transform with the same plan (and give the
-    same numbers to the bit).  Without a readable file the process keeps its own wisdom."""
+    same numbers to the bit).  Without a readable file the process keeps its own wisdom.
+    The file is JSON holding FFTW's text (never a pickle: a file planted in the cache must
+    not run code); one that is not a regular file, too large or not such a document is
+    ignored."""
+    path = _wisdom_path()
     try:
-        with open(_wisdom_path(), "rb") as fh:
-            wisdom = pickle.load(fh)
-    except (OSError, EOFError, pickle.UnpicklingError, ValueError, TypeError):
+        if not path.is_file() or path.stat().st_size > WISDOM_MAX_BYTES:
+            return
+        wisdom = wisdom_from_json(path.read_text(encoding="ascii"))
+    except (OSError, ValueError, UnicodeError):
         return  # no or unreadable wisdom: plan afresh
     pyfftw.forget_wisdom()
     try:
@@ -78,10 +110,10 @@ def _save_wisdom():
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".wisdom-")
-        with os.fdopen(fd, "wb") as fh:
-            pickle.dump(pyfftw.export_wisdom(), fh)
+        with os.fdopen(fd, "w", encoding="ascii") as fh:
+            fh.write(wisdom_to_json(pyfftw.export_wisdom()))
         os.replace(tmp, path)  # atomic: concurrent writers never leave a torn file
-    except OSError:
+    except (OSError, UnicodeError):
         pass  # a read-only cache only costs planning time
 
 

@@ -375,7 +375,7 @@ def cache_digests():
     if root.is_dir():
         for p in sorted(root.iterdir()):
             fit = p.name.startswith("expfit-") and p.suffix == ".npz"
-            wis = p.name.startswith("fftw-wisdom-") and p.suffix == ".pickle"
+            wis = p.name.startswith("fftw-wisdom-") and p.suffix in (".json", ".pickle")
             if p.is_file() and (fit or wis):
                 try:
                     data = p.read_bytes()

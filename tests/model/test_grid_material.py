@@ -1,5 +1,3 @@
-import pickle
-
 import numpy as np
 import pytest
 
@@ -100,8 +98,8 @@ def test_plans_follow_the_wisdom_file(tmp_path, monkeypatch):
         return [set(w.decode().splitlines()) for w in wisdom]
 
     def on_file():  # the host's wisdom file, the only one in the cache directory
-        (path,) = spectral.cache_dir().glob("fftw-wisdom-*.pickle")
-        return entries(pickle.loads(path.read_bytes()))
+        (path,) = spectral.cache_dir().glob("fftw-wisdom-*.json")
+        return entries(spectral.wisdom_from_json(path.read_text()))
 
     g = Grid(n1=24, n3=16, L1=1.0, L3=1.0)
     monkeypatch.setenv("CRACKLAB_CACHE", str(tmp_path / "host"))
