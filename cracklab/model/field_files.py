@@ -8,6 +8,14 @@ is a number, a literal nested list, or a reference to an array in a file::
     tau_c = { file = "toughness.npy" }                   # one numpy array, no var
 
 A relative ``file`` is resolved against the directory of the scene file (of ``base``).
+A scene reads files only from its own folder and the folders below it (after symbolic
+links are followed), and only regular files (a Zarr field: a directory of them): a scene
+received from someone else then cannot copy the reader's other data into its output, nor
+hang the run on a FIFO or a device. Other folders are read only when the user allows them
+(``allow``: ``cracklab run --allow-files DIR``, or the environment variable
+CRACKLAB_ALLOW_FILES, folders separated by ``os.pathsep``). Where each field came from
+(the reference as written and the SHA-256 of the file's bytes) is kept with the scene
+(``Scene.sources``) and written as the ``source`` attribute of its input variable.
 The array must have the grid's shape (``Grid.shape``: (n1, n3), or (n1, n3 + 1) on a
 half plane; in the plane problem (n1,) is taken as (n1, 1)). A netCDF or Zarr variable
 must lie on the dims ``x1`` and ``x3`` (either order), and each must carry its coordinate,
@@ -24,7 +32,9 @@ in the TOML, once).
 """
 from __future__ import annotations
 
+import hashlib
 import os
+import stat
 import warnings
 from pathlib import Path
 
@@ -39,6 +49,10 @@ FORMATS = "netCDF (.nc, .nc4, .netcdf, .cdf), Zarr (.zarr, a directory) or numpy
 REF_KEYS = ("file", "var")
 #: a coordinate of a file matches the grid's node when within this fraction of a cell
 COORD_TOLERANCE = 1e-6
+#: folders besides the scene file's own from which field files may be read (os.pathsep-separated)
+ALLOW_ENV = "CRACKLAB_ALLOW_FILES"
+#: a Zarr field with more entries than this is not walked (and refused)
+MAX_ZARR_ENTRIES = 100_000
 
 
 def is_file_reference(value) -> bool:
@@ -63,8 +77,86 @@ def _format(path: Path) -> str | None:
     return None
 
 
-def resolve(field: str, ref, base) -> tuple[Path, str, str | None]:
-    """(path, format, var) of a file reference, checked for its keys and for the file."""
+def allowed_roots(base, allow=()) -> list[Path]:
+    """The folders field files may be read from: the scene file's (``base``; None: the
+    current directory), the ``allow`` folders and those of CRACKLAB_ALLOW_FILES."""
+    extra = [a for a in os.environ.get(ALLOW_ENV, "").split(os.pathsep) if a.strip()]
+    roots = [Path(base if base is not None else os.getcwd())] + [Path(a).expanduser() for a in (*allow, *extra)]
+    return [r.resolve() for r in roots]
+
+
+def _kind_of(mode) -> str | None:
+    """The name of a special file's kind (None for a regular file or a directory)."""
+    for test, name in ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket")):
+        if test(mode):
+            return name
+    return None if stat.S_ISREG(mode) or stat.S_ISDIR(mode) else "not a regular file"
+
+
+def _inside(path: Path, roots) -> bool:
+    return any(path == r or path.is_relative_to(r) for r in roots)
+
+
+def _outside_message(name, real, roots, base) -> str:
+    where = "the scene file's folder" if base is not None else "the current directory"
+    return (f"file {name!r} lies outside {where} ({roots[0]}): a scene reads field files only from its "
+            f"own folder and below ({real} is not), so that a scene from someone else cannot copy other "
+            f"data of yours into its output; to read it, allow its folder (cracklab run --allow-files "
+            f"{real.parent}, or {ALLOW_ENV}={real.parent})")
+
+
+def _check_place(field, name, path, roots, base):
+    """The file (or each entry of a Zarr directory) is a regular file inside ``roots``."""
+    real = path.resolve()
+    if not _inside(real, roots):
+        raise InputError(field, _outside_message(name, real, roots, base))
+    kind = _kind_of(os.stat(real).st_mode)
+    if kind is not None:
+        raise InputError(field, f"file {name!r} is {kind}: a field is read only from a regular file (or a "
+                                f"Zarr directory of them)")
+    if stat.S_ISDIR(os.stat(real).st_mode):
+        count = 0
+        for top, dirs, files in os.walk(real):
+            for entry in dirs + files:
+                count += 1
+                if count > MAX_ZARR_ENTRIES:
+                    raise InputError(field, f"file {name!r}: a directory of more than {MAX_ZARR_ENTRIES} "
+                                            f"entries is not read as a field")
+                inner = Path(top) / entry
+                target = inner.resolve()
+                if not _inside(target, roots):
+                    raise InputError(field, f"file {name!r}: its entry {inner.relative_to(real)} links to "
+                                            f"{target}, outside the folders field files are read from")
+                try:
+                    mode = os.stat(target).st_mode
+                except OSError:
+                    continue  # a dangling link: the reader reports what it misses
+                kind = _kind_of(mode)
+                if kind is not None:
+                    raise InputError(field, f"file {name!r}: its entry {inner.relative_to(real)} is {kind}; "
+                                            f"a field is read only from regular files")
+    return real
+
+
+def source_of(ref, path: Path) -> str:
+    """Where a field came from, for the store's provenance: the reference as the scene
+    wrote it and the SHA-256 of the bytes read (of every file of a Zarr directory, in
+    path order)."""
+    h = hashlib.sha256()
+    files = [path] if path.is_file() else sorted(p for p in path.rglob("*") if p.is_file())
+    for p in files:
+        if p is not path:
+            h.update(str(p.relative_to(path)).encode() + b"\0")
+        with open(p, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    return f"file reference {describe(ref)}, sha256 {h.hexdigest()}"
+
+
+def resolve(field: str, ref, base, allow=()) -> tuple[Path, str, str | None]:
+    """(path, format, var) of a file reference, checked for its keys and for the file: a
+    regular file (or a Zarr directory of them) inside the folders of :func:`allowed_roots`."""
     if not isinstance(ref, dict):
         raise InputError(field, f"must be a file reference {{file = ..., var = ...}}, got {ref!r}")
     unknown = [k for k in ref if k not in REF_KEYS]
@@ -85,6 +177,7 @@ def resolve(field: str, ref, base) -> tuple[Path, str, str | None]:
         where = "the scene file's directory" if base is not None else "the current directory"
         raise InputError(field, f"no such file {name!r} (looked for {path}; a relative path is taken from "
                                 f"{where})")
+    path = _check_place(field, name, path, allowed_roots(base, allow), base)
     fmt = _format(path)
     if fmt is None:
         raise InputError(field, f"file {name!r}: unknown format {path.suffix or '(no suffix)'!r}; a field is read "
@@ -197,11 +290,19 @@ def _from_npy(field, path, name, grid):
     return values.reshape(grid.shape)
 
 
-def read_field_file(field: str, ref, grid, kind: str = "field", base=None) -> np.ndarray:
+def read_field_file(field: str, ref, grid, kind: str = "field", base=None, allow=(),
+                    sources: dict | None = None) -> np.ndarray:
     """The array a file reference ``ref`` points at, for the field named ``field`` (e.g.
     ``law.tau_c``), checked against ``grid``: a float array for kind "field", a boolean one
-    for "mask". ``base``: the directory relative paths start from (None: the current one)."""
-    path, fmt, var = resolve(field, ref, base)
+    for "mask". ``base``: the directory relative paths start from (None: the current one);
+    ``allow``: further folders files may be read from (:func:`allowed_roots`); ``sources``:
+    a dict that receives ``{field: source_of(ref, path)}``."""
+    path, fmt, var = resolve(field, ref, base, allow)
+    if sources is not None:
+        try:
+            sources[field] = source_of(ref, path)
+        except OSError as exc:
+            raise InputError(field, f"file {ref['file']!r} cannot be read: {exc.strerror or exc}") from None
     name = ref["file"]
     values = _from_npy(field, path, name, grid) if fmt == "npy" else \
         _from_dataset(field, path, fmt, var, name, grid)

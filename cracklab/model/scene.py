@@ -120,6 +120,9 @@ class Scene:
     units: dict = field(default_factory=lambda: {"length": "1", "time": "1", "stress": "1"})
     name: str = "scene"
     materials: tuple | None = None
+    #: {field: where it was read}, for a field read from a file (cracklab.model.field_files):
+    #: written as its input variable's ``source`` attribute; not part of the scene's identity
+    sources: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
         check_fields_nesting(self, "")
@@ -331,6 +334,8 @@ class Scene:
             changes["materials"] = None
         elif "materials" in changes and "material" not in changes:
             changes["material"] = None
+        if "sources" not in changes:  # a replaced law or loading no longer holds what was read
+            changes["sources"] = {k: v for k, v in self.sources.items() if k.split(".")[0] not in changes}
         return dataclasses.replace(self, **changes)
 
     # thin wrappers over cracklab.model.scene_io (lossless round trips, see docs/scenes.md)
@@ -356,11 +361,12 @@ class Scene:
         return scene_from_dataset(ds)
 
     @staticmethod
-    def from_toml(source, *, base=None) -> "Scene":
+    def from_toml(source, *, base=None, allow=()) -> "Scene":
         """The scene of a TOML text, a file's bytes, or a TOML file. A file is a
         ``pathlib.Path`` or a one-line string ending in ".toml". A field's file reference ``{ file = "x.nc",
         var = "tau_c" }`` is read relative to the file's directory (for text: ``base``,
-        default the current directory) and checked against the grid (docs/toml.md)."""
+        default the current directory), from that folder and below or the ``allow`` folders,
+        and checked against the grid (docs/toml.md)."""
         from .scene_io import scene_from_toml
 
-        return scene_from_toml(source, base=base)
+        return scene_from_toml(source, base=base, allow=allow)

@@ -322,27 +322,32 @@ def looks_like_path(source) -> bool:
             and not text.startswith(("[", "#")))
 
 
-def scene_from_toml_file(path, where: str | None = None):
+def scene_from_toml_file(path, where: str | None = None, allow=()):
     """The scene of the TOML file at ``path``, its file references resolved relative to
-    the file's directory; a file that cannot be read is one InputError naming ``where``
-    (default: the path)."""
+    the file's directory (and read from it and below, or the ``allow`` folders); a file
+    that cannot be read is one InputError naming ``where`` (default: the path)."""
     path = Path(path)
-    return scene_from_data(read_toml_file(path, where), base=path.absolute().parent)
+    return scene_from_data(read_toml_file(path, where), base=path.absolute().parent, allow=allow)
 
 
-def scene_from_toml(source, base=None):
+def scene_from_toml(source, base=None, allow=()):
     """Inverse of ``scene_to_toml`` and ``write_scene_toml``; the same format as ``cracklab
     run SCENE.toml``. ``source``: the TOML text, the bytes of a file, or the path of a file
     (a ``pathlib.Path``, or a one-line string ending in ".toml"). File references are
     resolved relative to the file's directory, or for text to ``base`` (default: the
     current directory)."""
     if looks_like_path(source):
-        return scene_from_toml_file(Path(str(source).strip()) if isinstance(source, str) else source)
-    return scene_from_data(read_toml(source, "toml"), base=base)
+        return scene_from_toml_file(Path(str(source).strip()) if isinstance(source, str) else source,
+                                    allow=allow)
+    return scene_from_data(read_toml(source, "toml"), base=base, allow=allow)
 
 
 def _field_attrs(scene, section, key):
-    return {"long_name": f"scene parameter {section}.{key}", "units": input_unit(scene, section, key)}
+    attrs = {"long_name": f"scene parameter {section}.{key}", "units": input_unit(scene, section, key)}
+    source = scene.sources.get(f"{section}.{key}")
+    if source:
+        attrs["source"] = source   # where the field was read (cracklab.model.field_files.source_of)
+    return attrs
 
 
 def scene_attrs(scene) -> dict:
@@ -409,15 +414,16 @@ class _Files:
     """Where a scene's file references are read: the directory relative paths start from
     (None: the current one; NO_FILES: none are read) and the grid the fields must fit."""
 
-    def __init__(self, base, grid):
-        self.base, self.grid = base, grid
+    def __init__(self, base, grid, allow=()):
+        self.base, self.grid, self.allow = base, grid, tuple(allow)
+        self.sources: dict = {}   # {field: where it was read}, Scene.sources
 
     def read(self, path, ref, kind):
         if self.base is NO_FILES:
             raise InputError(path, f"got the file reference {describe_reference(ref)}: files are read only for a "
                                    f"TOML scene (cracklab run, Scene.from_toml); here the field must be given as "
                                    f"an array")
-        return read_field_file(path, ref, self.grid, kind, self.base)
+        return read_field_file(path, ref, self.grid, kind, self.base, self.allow, self.sources)
 
 
 def _coerce(path, kind, value, arrays, files=None):
@@ -533,12 +539,13 @@ def _build(section, cls, d, arrays, schema=None, files=None):
         raise InputError(section, str(exc)) from None
 
 
-def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
+def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES, allow=()):
     """A Scene from the nested dict of ``scene_to_data`` / TOML; strict: unknown keys,
     wrong types and out-of-range values raise one InputError naming the field. File
     references ``{file = ..., var = ...}`` of fields are read relative to ``base`` (a
-    directory; None: the current one) and checked against the grid; by default
-    (``NO_FILES``) they are refused."""
+    directory; None: the current one), from that folder and below or the ``allow``
+    folders (cracklab.model.field_files), and checked against the grid; by default
+    (``NO_FILES``) they are refused. Where each was read is kept in ``Scene.sources``."""
     from .scene import Scene
 
     arrays = arrays or {}
@@ -564,7 +571,7 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
     parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("grid",) + (("material",) * ("material" in data))}
     if "materials" in data:
         parts["materials"] = _materials(data["materials"], arrays)
-    files = _Files(base, parts["grid"])
+    files = _Files(base, parts["grid"], allow)
     parts["law"] = _build("law", LAWS[kind], law_data, arrays, files=files)
     for s in ("loading", "record", "numerics"):
         parts[s] = _build(s, classes[s], data.get(s), arrays, files=files if s == "loading" else None)
@@ -575,7 +582,7 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
         top["name"] = _coerce("name", "string", data["name"], arrays)
     if "units" in data:
         top["units"] = _units(data["units"])
-    return Scene(**parts, **top)
+    return Scene(**parts, **top, sources=dict(files.sources))
 
 
 def _materials(d, arrays) -> tuple:
@@ -717,7 +724,7 @@ def _same(a, b) -> bool:
     if isinstance(a, dict):
         return list(a) == list(b) and all(_same(a[k], b[k]) for k in a)
     if dataclasses.is_dataclass(a):
-        return all(_same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+        return all(_same(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a) if f.compare)
     return a == b
 
 

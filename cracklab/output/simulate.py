@@ -38,7 +38,11 @@ def _attrs(scene, name):
 def _input_attrs(scene, name):
     """Attrs of a scene input field stored as ``input_<section>_<key>``."""
     section, key = name[len("input_"):].split("_", 1)
-    return {"long_name": f"scene input {section}.{key}", "units": input_unit(scene, section, key)}
+    attrs = {"long_name": f"scene input {section}.{key}", "units": input_unit(scene, section, key)}
+    source = scene.sources.get(f"{section}.{key}")
+    if source:
+        attrs["source"] = source   # the field file it was read from (cracklab.model.field_files)
+    return attrs
 
 
 def _field(state, name, faces=None):
