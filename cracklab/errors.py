@@ -92,6 +92,11 @@ class StoreWarning(UserWarning):
     ensemble member recomputed); the message names the damaged files."""
 
 
+class DiskBudgetError(InputError):
+    """A run's store would need more disk than its file system has free: raised before
+    any step, with the bound on the output's size and the free space (cracklab.output.disk)."""
+
+
 class MemoryBudgetError(InputError):
     """A run (or a sweep's workers) would need more memory than is available: raised
     before any step, with the estimate and the memory available (cracklab.solver.budget)."""

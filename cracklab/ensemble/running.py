@@ -115,7 +115,7 @@ def _where(key, sweep) -> str:
     return "members"
 
 
-def preflight(base_scene, members, *, fft_threads=1, sweep=None) -> dict:
+def preflight(base_scene, members, *, fft_threads=1, sweep=None, outputs=None) -> dict:
     """Check every member before any work starts, in this process: its scene paths name
     keys of the scene's sections, with values of the right type (an unknown key, with the
     nearest one suggested, or text for a number raises InputError naming the key). The
@@ -123,7 +123,8 @@ def preflight(base_scene, members, *, fft_threads=1, sweep=None) -> dict:
     here, and checked against their scene; other builders run on the workers only (they
     may be slow or need the worker), their law keys checked against every law's.
     Returns {member id: MemoryEstimate, or None when not built here or when the build
-    fails on a bad value: such a member fails on its worker and is recorded}."""
+    fails on a bad value: such a member fails on its worker and is recorded}; ``outputs``,
+    a dict, receives {member id: OutputEstimate} of the members built here."""
     from ..model.scene import Scene
     from ..solver.budget import run_memory
     from .builders import _own_builders
@@ -165,6 +166,10 @@ def preflight(base_scene, members, *, fft_threads=1, sweep=None) -> dict:
             out[m.id] = None
             continue
         out[m.id] = run_memory(member)
+        if outputs is not None:
+            from ..output.disk import output_size
+
+            outputs[m.id] = output_size(member)
     return out
 
 
@@ -197,7 +202,8 @@ def _workers_for(estimates, todo, workers, local):
 
 
 def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, workers=None,
-        progress=None, fft_threads=1, study_spec=None, overwrite=False, check_memory=True) -> SweepResult:
+        progress=None, fft_threads=1, study_spec=None, overwrite=False, check_memory=True,
+        check_disk=True) -> SweepResult:
     """Run every member of ``sweep`` over ``base_scene`` into the Zarr v3 ``store``.
 
     ``base_scene``: a Scene (parameters are scene paths), a ``Builder``, or a builder
@@ -227,8 +233,11 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     spec = study_spec or _spec_of(base_scene, sweep)
     check_store(store)                  # before the lock: a wrong path is left untouched
     replace = _check_same_study(store, spec, overwrite)
-    estimates = preflight(base_scene, members, fft_threads=fft_threads, sweep=sweep)
+    outputs = {}
+    estimates = preflight(base_scene, members, fft_threads=fft_threads, sweep=sweep, outputs=outputs)
     todo = [m for m in members if replace or not resume or not is_complete(store, m.id)]
+    if check_disk and todo and "://" not in store:
+        _check_sweep_disk(store, [outputs[m.id] for m in todo if m.id in outputs], len(todo))
     synchronous = client is None and scheduler == "synchronous"
     address = None if client is not None or synchronous else (scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS"))
     memory_limit = "auto"
@@ -262,6 +271,22 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     finally:
         if own is not None:
             own.close()
+
+
+def _check_sweep_disk(store, outputs, ntodo):
+    """Refuse a sweep whose members to run (those built here) write more than the store's
+    file system has free (cracklab.output.disk)."""
+    if not outputs:
+        return
+    from ..output.disk import OutputEstimate, check_disk
+
+    total = OutputEstimate(snapshots=sum(o.snapshots for o in outputs), fields=max(o.fields for o in outputs),
+                           raw=sum(o.raw for o in outputs), bound=sum(o.bound for o in outputs))
+    what = f"the sweep's {len(outputs)} member{'s' if len(outputs) != 1 else ''} to run" + \
+        (f" (of {ntodo}; the others are built on the workers)" if len(outputs) < ntodo else "")
+    check_disk(total, store, what=what, reuse=False,
+               hint="record fewer fields, less often or on a region, or write to a larger disk; or sweep anyway "
+                    "with check_disk=False (cracklab sweep --no-disk-check)")
 
 
 def _identity(spec: dict) -> tuple:

@@ -121,6 +121,13 @@ class Record:
         steps = np.arange(0, nsteps + 1, every)
         return steps
 
+    def snapshot_count(self, nsteps: int, dt: float) -> int:
+        """``len(snapshot_steps(nsteps, dt))`` without making the steps (for ``every``)."""
+        if self.times is not None:
+            return len(self.snapshot_steps(nsteps, dt))
+        every = self.every or max(1, nsteps // 20)
+        return nsteps // every + 1
+
     def region_slices(self, grid) -> tuple[slice, slice]:
         def sl(coord, bounds, field):
             if bounds is None:

@@ -77,8 +77,9 @@ class Recorder:
     def __init__(self, scene, store, path=None, flush_every=8):
         self.scene, self.store, self.path, self.flush_every = scene, store, path, flush_every
         grid = scene.grid
-        self.steps = set(int(s) for s in scene.record.snapshot_steps(scene.nsteps, scene.dt)) \
-            if scene.record.fields else set()
+        #: the snapshot steps, sorted (an array: a set of millions of ints took gigabytes)
+        self.steps = np.asarray(scene.record.snapshot_steps(scene.nsteps, scene.dt), dtype=np.int64) \
+            if scene.record.fields else np.zeros(0, np.int64)
         self.s1, self.s3 = scene.record.region_slices(grid)
         self.nodes = scene.record.station_nodes(grid)
         comps = scene.components
@@ -111,7 +112,8 @@ class Recorder:
         for j, (i, k) in enumerate(self.nodes.values()):
             for f in self.station_fields:
                 self.series[f][state.n, j] = _field(state, f, faces)[i, k]
-        if state.n in self.steps:
+        i = int(np.searchsorted(self.steps, state.n))
+        if i < self.steps.size and self.steps[i] == state.n:
             self.pending.append((state.t, {f: np.array(_field(state, f, faces)[self.s1, self.s3])
                                            for f in self.scene.record.fields}))
             if self.store is not None and len(self.pending) >= self.flush_every:
@@ -146,7 +148,7 @@ class Recorder:
 
     def snapshot_times(self):
         """Times of all the snapshots of the run (as the stepper computes them)."""
-        return np.array([n * self.scene.dt for n in sorted(self.steps)])
+        return self.steps * self.scene.dt
 
     def create(self):
         """Create the store at its final size: coordinates (all snapshot times), snapshot
@@ -363,7 +365,8 @@ def _deferred_interrupt(enabled):
         signal.signal(signal.SIGINT, old)
 
 
-def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False, check_memory=True):
+def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False, check_memory=True,
+             check_disk=True):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
     ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
     snapshots stream to that Zarr store during the run and the result is read back lazily.
@@ -379,7 +382,10 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     the damaged files). Store problems raise StoreError.
 
     ``check_memory``: estimate the run's memory first (``cracklab.solver.budget``) and raise
-    ``MemoryBudgetError`` before any step when it exceeds the memory available. Ctrl-C
+    ``MemoryBudgetError`` before any step when it exceeds the memory available.
+    ``check_disk``: for a store on a local path, bound the bytes the run writes
+    (``cracklab.output.disk``) and raise ``DiskBudgetError`` before any step when the
+    store's file system cannot hold them. Ctrl-C
     during a run into a local store stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
@@ -394,6 +400,13 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
         fits(run_memory(scene, store=store is not None), what=f"the run of {scene.name!r}",
              hint="make the grid coarser or the run shorter, or run it anyway with check_memory=False "
                   "(cracklab run --no-memory-check)")
+    if check_disk and path is not None:
+        from .disk import check_disk as holds, output_size
+
+        holds(output_size(scene), path, what=f"the run of {scene.name!r}",
+              hint="record fewer fields, less often (record.every, record.times) or on a region "
+                   "(record.region), or write to a larger disk; or run it anyway with check_disk=False "
+                   "(cracklab run --no-disk-check)")
     rec = Recorder(scene, store, path)
     start, last = None, -1
     if path is not None:

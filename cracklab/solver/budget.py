@@ -176,11 +176,14 @@ def run_memory(scene, *, store=True) -> MemoryEstimate:
     rec = scene.record
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
     frame = n1r * n3r * 8 * len(rec.fields)
-    nsnap = len(rec.snapshot_steps(scene.nsteps, scene.dt)) if rec.fields else 0
+    nsnap = rec.snapshot_count(scene.nsteps, scene.dt) if rec.fields else 0
     kept = min(nsnap, _FLUSH) * 2 if store else nsnap * 2
     nstations = len(rec.stations or {})
     series = (scene.nsteps + 1) * nstations * (3 * nc + 1) * 8 * (2 if nstations else 0)
-    records = kept * frame + series + 2 * N * 8
+    # the recorder's set-up: the snapshot steps, their times and the store's time coordinate
+    # (and its copy as it is written), 8 bytes each per snapshot
+    index = 4 * 8 * nsnap
+    records = kept * frame + series + 2 * N * 8 + index
     return MemoryEstimate(int(history), int(work), int(records), int(scene.nsteps), setup=int(building))
 
 
