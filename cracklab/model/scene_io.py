@@ -31,6 +31,7 @@ import json
 import math
 import numbers
 import os
+import re
 import uuid
 from pathlib import Path
 
@@ -196,7 +197,25 @@ def _toml_text(scene, field) -> str:
     if two is not None:
         del data["material"]
         data["materials"] = two
-    return tomli_w.dumps(data)
+    return _compact_arrays(tomli_w.dumps(data))
+
+
+#: a key's array of scalars as tomli_w writes it, one item a line; and a row of a field
+_SCALAR_ARRAY = re.compile(r"^([^\n]* = )\[\n((?:    [^\[\]\n]+,\n)+)\]$", re.MULTILINE)
+_FIELD_ROW = re.compile(r"^(    )\[\n((?:        [^\[\]\n]+,\n)+)    \](,)$", re.MULTILINE)
+
+
+def _compact_arrays(text: str, width: int = 100) -> str:
+    """Arrays of scalars on one line where it fits in ``width`` (a station's (x1, x3), the
+    recorded fields), as a person writes them, and each row of a field (a nested list) on
+    a line of its own. Every line of tomli_w's output is structure (its strings escape
+    newlines), so an item line is one scalar followed by a comma."""
+    def one_line(m, limit=width):
+        items = [ln.strip()[:-1] for ln in m.group(2).splitlines()]
+        line = f"{m.group(1)}[{', '.join(items)}]" + (m.group(3) if m.re is _FIELD_ROW else "")
+        return line if limit is None or len(line) <= limit else m.group(0)
+
+    return _SCALAR_ARRAY.sub(one_line, _FIELD_ROW.sub(lambda m: one_line(m, None), text))
 
 
 def scene_to_toml(scene) -> str:
@@ -556,6 +575,7 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES, al
     for key in data:
         if key not in allowed:
             raise InputError(key, f"unknown key; accepted: {', '.join(sorted(allowed))}")
+    units = _units(data["units"]) if "units" in data else None   # a stray key there is named first
     law_data = data.get("law")
     if not isinstance(law_data, dict) or "kind" not in law_data:
         raise InputError("law.kind", f"is required; accepted: {', '.join(sorted(LAWS))}")
@@ -580,8 +600,8 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES, al
         top["beta"] = _coerce("beta", "number", data["beta"], arrays)
     if "name" in data:
         top["name"] = _coerce("name", "string", data["name"], arrays)
-    if "units" in data:
-        top["units"] = _units(data["units"])
+    if units is not None:
+        top["units"] = units
     return Scene(**parts, **top, sources=dict(files.sources))
 
 

@@ -484,9 +484,18 @@ def _run(scene, rec, store, path, start, last, progress, every_n, every_s, adapt
     return rec.finish(last)
 
 
+def _station_order(name: str):
+    """The order of a station Dataset's variables, as the recorder makes them: slip, rate,
+    traction (by component), the strength, then the faces' fields (a store lists its
+    arrays in no fixed order)."""
+    kind, _, rest = name[len("station_"):].partition("_")
+    rank = {"delta": 0, "v": 1, "tau": 2, "strength": 3}.get(kind, 4)
+    return (rank, 0 if rest.isdigit() else 1, rest)
+
+
 def stations(result) -> xr.Dataset:
     """Station series of a run: dims (station, t), variables named as the grid fields."""
-    names = [v for v in result.data_vars if v.startswith("station_")]
+    names = sorted((v for v in result.data_vars if v.startswith("station_")), key=_station_order)
     if not names:
         raise ValueError("this result has no stations; give record=Record(stations={...})")
     ds = result[names].rename({n: n[len("station_"):] for n in names})
