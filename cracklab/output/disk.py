@@ -119,6 +119,8 @@ def check_disk(estimate: OutputEstimate, path, *, what: str = "the run", hint: s
     from ..solver.budget import fmt_bytes
 
     path = Path(path)
+    if not os.access(_existing(path), os.W_OK):
+        return 0      # not writable here: creating the store says so, in its own words
     room = free_space(path) + (_size(path) if reuse else 0)
     if estimate.bound > room:
         raise DiskBudgetError("record", f"{what} writes {estimate.describe()} into {path}, but its file system has "
