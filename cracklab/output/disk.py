@@ -119,8 +119,10 @@ def check_disk(estimate: OutputEstimate, path, *, what: str = "the run", hint: s
     from ..solver.budget import fmt_bytes
 
     path = Path(path)
-    if not os.access(_existing(path), os.W_OK):
-        return 0      # not writable here: creating the store says so, in its own words
+    where = _existing(path)
+    fs = os.statvfs(where)
+    if not os.access(where, os.W_OK) or fs.f_flag & os.ST_RDONLY or fs.f_blocks == 0:
+        return 0      # read-only, or a pseudo file system with no blocks: creating the store says so
     room = free_space(path) + (_size(path) if reuse else 0)
     if estimate.bound > room:
         raise DiskBudgetError("record", f"{what} writes {estimate.describe()} into {path}, but its file system has "
