@@ -41,7 +41,7 @@ from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .field_files import (describe as describe_reference, is_file_reference, read_field_file, sidecar_path,
                           write_sidecar)
-from .units import input_unit
+from .units import check_scene_units, input_unit, parameter_kind, unit
 from .loading import Loading
 from .material import Material
 from .record import Record
@@ -407,17 +407,21 @@ NO_FILES = "no files"
 
 class _Files:
     """Where a scene's file references are read: the directory relative paths start from
-    (None: the current one; NO_FILES: none are read) and the grid the fields must fit."""
+    (None: the current one; NO_FILES: none are read), the grid the fields must fit, and the
+    scene's units and law class, which give each field the unit a file's values are
+    converted to."""
 
-    def __init__(self, base, grid):
-        self.base, self.grid = base, grid
+    def __init__(self, base, grid, units=None, law_class=None):
+        self.base, self.grid, self.units, self.law_class = base, grid, units or DEFAULT_UNITS, law_class
 
     def read(self, path, ref, kind):
         if self.base is NO_FILES:
             raise InputError(path, f"got the file reference {describe_reference(ref)}: files are read only for a "
                                    f"TOML scene (cracklab run, Scene.from_toml); here the field must be given as "
                                    f"an array")
-        return read_field_file(path, ref, self.grid, kind, self.base)
+        section, key = path.split(".", 1)
+        scene_unit = unit(self.units, parameter_kind(self.law_class, section, key)) if kind == "field" else None
+        return read_field_file(path, ref, self.grid, kind, self.base, unit=scene_unit)
 
 
 def _coerce(path, kind, value, arrays, files=None):
@@ -564,7 +568,8 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
     parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("grid",) + (("material",) * ("material" in data))}
     if "materials" in data:
         parts["materials"] = _materials(data["materials"], arrays)
-    files = _Files(base, parts["grid"])
+    units = _units(data["units"]) if "units" in data else None
+    files = _Files(base, parts["grid"], units, LAWS[kind])
     parts["law"] = _build("law", LAWS[kind], law_data, arrays, files=files)
     for s in ("loading", "record", "numerics"):
         parts[s] = _build(s, classes[s], data.get(s), arrays, files=files if s == "loading" else None)
@@ -573,8 +578,8 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES):
         top["beta"] = _coerce("beta", "number", data["beta"], arrays)
     if "name" in data:
         top["name"] = _coerce("name", "string", data["name"], arrays)
-    if "units" in data:
-        top["units"] = _units(data["units"])
+    if units is not None:
+        top["units"] = units
     return Scene(**parts, **top)
 
 
@@ -606,6 +611,7 @@ def _units(units) -> dict:
     for key in UNIT_KEYS:
         if key not in units:
             raise InputError(f"units.{key}", f"is required when units are given ({', '.join(UNIT_KEYS)})")
+    check_scene_units(units)
     return dict(units)
 
 
