@@ -254,14 +254,16 @@ def scene_text(ens, member=None) -> str:
 
 
 def _with_input_coords(ds, scene_json):
-    """Give the input_x1/input_x3 dims (full-grid scene inputs) their coordinates, so that
-    members on different grids align on them."""
+    """Give the input_x1/input_x3 dims (full-grid scene inputs) their coordinates, in the
+    scene's length unit, so that members on different grids align on them."""
     dims = [d for d in ("input_x1", "input_x3") if d in ds.dims and d not in ds.coords]
     if not dims:
         return ds
     try:
-        grid = json.loads(scene_json)["grid"]
-    except (ValueError, KeyError, TypeError):
+        scene = json.loads(scene_json)
+        grid = scene["grid"]
+        length = str((scene.get("units") or {}).get("length", "1"))
+    except (ValueError, KeyError, TypeError, AttributeError):
         return ds
     coords = {}
     for d, n, L in (("input_x1", "n1", "L1"), ("input_x3", "n3", "L3")):
@@ -269,7 +271,7 @@ def _with_input_coords(ds, scene_json):
         nodes = int(grid.get(n, 0)) + (d == "input_x3" and grid.get("free_surface") is True)
         if d in dims and n in grid and L in grid and nodes == ds.sizes[d]:
             coords[d] = (d, np.arange(nodes) * float(grid[L]) / int(grid[n]),
-                         {"long_name": f"{d[len('input_'):]} of the scene inputs"})
+                         {"long_name": f"{d[len('input_'):]} of the scene inputs", "units": length})
     return ds.assign_coords(coords)
 
 

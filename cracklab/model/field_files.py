@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from .units import convert
 
 NETCDF_SUFFIXES = (".nc", ".nc4", ".netcdf", ".cdf")
 ZARR_SUFFIXES = (".zarr",)
@@ -239,7 +240,7 @@ def _expected(grid) -> str:
     return f"(n1, n3) = {grid.shape}" + (f" (or ({grid.n1},) in the plane problem)" if grid.plane else "")
 
 
-def _from_dataset(field, path, fmt, var, name, grid):
+def _from_dataset(field, path, fmt, var, name, grid, unit=None):
     ds = _open(field, path, fmt, name)
     with ds:
         if var not in ds.variables:
@@ -265,6 +266,8 @@ def _from_dataset(field, path, fmt, var, name, grid):
         except Exception as exc:  # noqa: BLE001 - damaged chunks, missing data
             raise InputError(field, f"variable {var!r} of {name!r} cannot be read: {type(exc).__name__}: "
                                     f"{exc}") from None
+        if unit is not None and values.dtype.kind in "iuf":
+            values = convert(field, values, da.attrs.get("units"), unit, f"variable {var!r} of {name!r}")
     return values.reshape(grid.shape)
 
 
@@ -291,12 +294,14 @@ def _from_npy(field, path, name, grid):
 
 
 def read_field_file(field: str, ref, grid, kind: str = "field", base=None, allow=(),
-                    sources: dict | None = None) -> np.ndarray:
+                    sources: dict | None = None, unit: str | None = None) -> np.ndarray:
     """The array a file reference ``ref`` points at, for the field named ``field`` (e.g.
     ``law.tau_c``), checked against ``grid``: a float array for kind "field", a boolean one
     for "mask". ``base``: the directory relative paths start from (None: the current one);
     ``allow``: further folders files may be read from (:func:`allowed_roots`); ``sources``:
-    a dict that receives ``{field: source_of(ref, path)}``."""
+    a dict that receives ``{field: source_of(ref, path)}``. ``unit``: the scene's unit of
+    the field; a netCDF or Zarr variable with a ``units`` attr is converted to it
+    (``cracklab.model.units.convert``), one without is taken as in it."""
     path, fmt, var = resolve(field, ref, base, allow)
     if sources is not None:
         try:
@@ -305,7 +310,7 @@ def read_field_file(field: str, ref, grid, kind: str = "field", base=None, allow
             raise InputError(field, f"file {ref['file']!r} cannot be read: {exc.strerror or exc}") from None
     name = ref["file"]
     values = _from_npy(field, path, name, grid) if fmt == "npy" else \
-        _from_dataset(field, path, fmt, var, name, grid)
+        _from_dataset(field, path, fmt, var, name, grid, unit)
     source = f"{var!r} of {name!r}" if var else repr(name)
     if kind == "mask":
         if values.dtype == bool:

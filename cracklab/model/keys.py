@@ -117,9 +117,12 @@ SECTION_KEYS = {
 
 #: the [units] table: all three keys or none (default: "1" each, a dimensionless scene)
 UNIT_KEYS = {
-    "length": Key("-", "a string", "unit of lengths (and so of x1, x3 in the output), e.g. \"m\"", (1.0,)),
-    "time": Key("-", "a string", "unit of times, e.g. \"s\"", (1.0,)),
-    "stress": Key("-", "a string", "unit of stresses, e.g. \"Pa\"", (1.0,)),
+    "length": Key("-", "a UDUNITS unit of length (\"m\", \"km\", \"mm\", ...) or \"1\"",
+                  "unit of lengths (and so of x1, x3 in the output), e.g. \"m\"", (1.0, "banana", "Pa", "m @ 5")),
+    "time": Key("-", "a UDUNITS unit of time (\"s\", \"ms\", ...) or \"1\"", "unit of times, e.g. \"s\"",
+                (1.0, "banana", "m", "s since 2000-01-01")),
+    "stress": Key("-", "a UDUNITS unit of stress (\"Pa\", \"kPa\", \"MPa\", \"GPa\", ...) or \"1\"",
+                  "unit of stresses, e.g. \"Pa\"", (1.0, "banana", "m", "-1 Pa")),
 }
 
 #: the keys of a file reference, ``{ file = "x.nc", var = "tau_c" }``

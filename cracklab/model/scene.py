@@ -14,6 +14,7 @@ from .loading import Loading
 from .material import Material
 from .record import FIELDS, Record, face_field
 from ..solver.schemes import SCHEMES
+from .units import check_scene_units
 from ..solver.stability import beta_max, gamma_limit
 
 #: {formulation: its convolution rule}, one per time scheme (cracklab.solver.schemes)
@@ -138,6 +139,7 @@ class Scene:
         if not isinstance(self.units, dict) or set(self.units) != set(units) \
                 or not all(isinstance(v, str) for v in self.units.values()):
             raise InputError("units", f"must be a dict of strings with exactly the keys {units}, got {self.units!r}")
+        check_scene_units(self.units)
         for name in ("t_end", "beta"):
             if isinstance(getattr(self, name), (bool, np.bool_)):
                 raise InputError(name, f"must be a number > 0, got {getattr(self, name)!r}")

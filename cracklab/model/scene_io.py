@@ -42,7 +42,7 @@ from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .field_files import (describe as describe_reference, is_file_reference, read_field_file, sidecar_path,
                           write_sidecar)
-from .units import input_unit
+from .units import check_scene_units, input_unit, parameter_kind, unit
 from .loading import Loading
 from .material import Material
 from .record import Record
@@ -431,10 +431,13 @@ NO_FILES = "no files"
 
 class _Files:
     """Where a scene's file references are read: the directory relative paths start from
-    (None: the current one; NO_FILES: none are read) and the grid the fields must fit."""
+    (None: the current one; NO_FILES: none are read), the grid the fields must fit, and the
+    scene's units and law class, which give each field the unit a file's values are
+    converted to."""
 
-    def __init__(self, base, grid, allow=()):
-        self.base, self.grid, self.allow = base, grid, tuple(allow)
+    def __init__(self, base, grid, units=None, law_class=None, allow=()):
+        self.base, self.grid, self.units, self.law_class = base, grid, units or DEFAULT_UNITS, law_class
+        self.allow = tuple(allow)
         self.sources: dict = {}   # {field: where it was read}, Scene.sources
 
     def read(self, path, ref, kind):
@@ -442,7 +445,9 @@ class _Files:
             raise InputError(path, f"got the file reference {describe_reference(ref)}: files are read only for a "
                                    f"TOML scene (cracklab run, Scene.from_toml); here the field must be given as "
                                    f"an array")
-        return read_field_file(path, ref, self.grid, kind, self.base, self.allow, self.sources)
+        section, key = path.split(".", 1)
+        scene_unit = unit(self.units, parameter_kind(self.law_class, section, key)) if kind == "field" else None
+        return read_field_file(path, ref, self.grid, kind, self.base, self.allow, self.sources, unit=scene_unit)
 
 
 def _coerce(path, kind, value, arrays, files=None):
@@ -591,7 +596,7 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES, al
     parts = {s: _build(s, classes[s], data.get(s), arrays) for s in ("grid",) + (("material",) * ("material" in data))}
     if "materials" in data:
         parts["materials"] = _materials(data["materials"], arrays)
-    files = _Files(base, parts["grid"], allow)
+    files = _Files(base, parts["grid"], units, LAWS[kind], allow)
     parts["law"] = _build("law", LAWS[kind], law_data, arrays, files=files)
     for s in ("loading", "record", "numerics"):
         parts[s] = _build(s, classes[s], data.get(s), arrays, files=files if s == "loading" else None)
@@ -633,6 +638,7 @@ def _units(units) -> dict:
     for key in UNIT_KEYS:
         if key not in units:
             raise InputError(f"units.{key}", f"is required when units are given ({', '.join(UNIT_KEYS)})")
+    check_scene_units(units)
     return dict(units)
 
 

@@ -44,24 +44,100 @@ def _nc_attrs(attrs):
     return out
 
 
-TIME_UNITS = ("s", "ms", "us", "min", "h", "d", "second", "seconds", "minute", "minutes", "hour", "hours",
-              "day", "days")
 CHUNK_BYTES = 4 << 20          # netCDF chunks of at most 4 MB
 COMPLEVEL = 4
 SMALL_BYTES = 1 << 10
 
 
+#: standard names that make a variable a time coordinate (CF 1.10, section 4.4)
+TIME_NAMES = ("time", "forecast_reference_time")
+
+
+def _is_time_reference(units) -> bool:
+    """True for units with a reference time ("s since 2000-01-01"), which CF 1.10 section 4.4
+    requires of a time coordinate."""
+    from ..model.units import parse
+
+    u = parse(units) if isinstance(units, str) else None
+    return u is not None and u.is_time_reference()
+
+
+def _members_scenes(ds) -> list:
+    """The scenes (plain data) of an ensemble's members (attr ``scenes``) or of one run."""
+    try:
+        if "scenes" in ds.attrs:
+            return [sc for sc in json.loads(ds.attrs["scenes"]).values() if isinstance(sc, dict)]
+        if "scene" in ds.attrs:
+            return [json.loads(ds.attrs["scene"])]
+    except (TypeError, ValueError):
+        pass
+    return []
+
+
+def _parameter_units(ds) -> dict:
+    """{coordinate: units} for the swept parameters of an ensemble (numeric coordinates with
+    the attr ``parameter``) that have none: a scene key's unit in the members' scene units
+    (``cracklab.model.keys``, the laws' declared kinds), "1" for counts and options, and "1"
+    for any parameter when every member's scene is dimensionless. A builder argument of a
+    scene with units gets none (the builder does not declare its quantity), nor does a
+    parameter whose members' units differ."""
+    from ..laws import LAWS
+    from ..model.keys import SECTION_KEYS, TOP_KEYS
+    from ..model.units import unit
+
+    scenes = _members_scenes(ds)
+    units = {json.dumps(sc.get("units") or {}, sort_keys=True) for sc in scenes}
+    if len(units) != 1:
+        return {}
+    units = json.loads(units.pop()) or {"length": "1", "time": "1", "stress": "1"}
+    laws = {str((sc.get("law") or {}).get("kind")) for sc in scenes}
+    out = {}
+    for name, var in ds.coords.items():
+        key = var.attrs.get("parameter")
+        if not isinstance(key, str) or "units" in var.attrs or var.dtype.kind not in "iuf":
+            continue
+        section, _, rest = key.partition(".")
+        kinds = set()
+        if key in TOP_KEYS:
+            kinds.add(TOP_KEYS[key].unit)
+        elif section in SECTION_KEYS and rest in SECTION_KEYS[section]:
+            kinds.add(SECTION_KEYS[section][rest].unit)
+        elif section == "law" and laws <= set(LAWS):
+            kinds |= {LAWS[k].parameters().get(rest, ("?",))[0] for k in laws}
+        kinds = {"1" if k == "-" else k for k in kinds}
+        if len(kinds) == 1 and kinds <= {"1", "length", "time", "stress", "velocity"}:
+            out[name] = unit(units, kinds.pop())
+        elif set(units.values()) == {"1"}:
+            out[name] = "1"
+    return out
+
+
 def _cf_clean(ds):
-    """CF conventions the Zarr store does not need: ``standard_name: time`` only on a time
-    in time units (a dimensionless run's t has units "1"), and coordinate values on every
-    dimension (input_x1 and input_x3 from the scene's grid, else the node index)."""
-    for name, var in ds.variables.items():
-        if var.attrs.get("standard_name") == "time" and str(var.attrs.get("units", "")).split(" ")[0] not in TIME_UNITS:
+    """CF 1.10 conventions the Zarr store does not need.
+
+    * A run's ``t`` is the time elapsed since its start, not a date. CF 1.10 section 4.4
+      makes a variable with ``axis: T`` or ``standard_name: time`` a time coordinate, and a
+      time coordinate's units must carry a reference time ("s since ..."). So a variable
+      whose units are not a time reference loses ``axis: T`` and a time standard name: ``t``
+      is a plain coordinate (section 4: the axis attribute is optional), in "s" or the
+      scene's time unit, or "1" in a dimensionless run.
+    * Coordinate values on every dimension: input_x1 and input_x3 from the scene's grid, in
+      its length unit (section 3.1: a dimensional quantity has units), else the node index,
+      units "1"; an ensemble's swept parameters in their units where they are known
+      (``_parameter_units``)."""
+    for var in ds.variables.values():
+        if _is_time_reference(var.attrs.get("units")):
+            continue
+        if var.attrs.get("axis") == "T":
+            del var.attrs["axis"]
+        if var.attrs.get("standard_name") in TIME_NAMES:
             del var.attrs["standard_name"]
+    for name, text in _parameter_units(ds).items():
+        ds.variables[name].attrs["units"] = text
     from ..ensemble.read import _with_input_coords
 
     ds = _with_input_coords(ds, ds.attrs.get("scene", "{}"))
-    missing = {d: (d, np.arange(ds.sizes[d]), {"long_name": f"index along {d}"}) for d in ds.dims
+    missing = {d: (d, np.arange(ds.sizes[d]), {"long_name": f"index along {d}", "units": "1"}) for d in ds.dims
                if d not in ds.coords}
     return ds.assign_coords(missing) if missing else ds
 
@@ -85,9 +161,10 @@ def encoding(ds) -> dict:
 
 
 def netcdf_ready(ds):
-    """A copy of ``ds`` that netCDF4 can store and that follows the CF conventions: Zarr
-    encodings dropped, attrs made netCDF types, string and object arrays as plain str,
-    coordinates on every dimension and ``standard_name`` time only in time units."""
+    """A copy of ``ds`` that netCDF4 can store and that follows the CF conventions 1.10:
+    Zarr encodings dropped, attrs made netCDF types, string and object arrays as plain str,
+    coordinates on every dimension, ``axis: T`` and ``standard_name: time`` only on a
+    time with a reference time (``_cf_clean``)."""
     ds = _cf_clean(ds.copy())
     strings = {}
     for name, var in ds.variables.items():

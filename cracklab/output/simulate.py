@@ -255,7 +255,7 @@ class Recorder:
                                  {"long_name": "first time the point failed", "units": scene.units["time"]})
         if self.nodes:
             extra = extra.assign_coords(
-                station=("station", np.array(list(self.nodes), dtype=object)),
+                station=("station", np.array(list(self.nodes), dtype=object), {"long_name": "station name"}),
                 station_x1=("station", [scene.grid.x1[i] for i, _ in self.nodes.values()],
                             {"units": scene.units["length"], "long_name": "station x1"}),
                 station_x3=("station", [scene.grid.x3[k] for _, k in self.nodes.values()],

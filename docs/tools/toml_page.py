@@ -351,6 +351,12 @@ REFERENCE_RULES = """\
 - A mask is booleans, or integers 0 and 1 (netCDF has no boolean type). A field is
   numbers; NaN (a missing value, a `_FillValue`) is refused. A float32 field stays
   float32.
+- A netCDF or Zarr variable with a `units` attr (a UDUNITS string, as CF files write
+  them) is converted to the field's unit in the scene's `[units]`: a `tau_c` in "MPa" read
+  into a scene whose stress unit is "Pa" is multiplied by 1e6. A unit UDUNITS does not
+  know is refused, and so is one of another dimension: a stress in "m", or any dimensional
+  unit for a quantity the scene keeps dimensionless ("1"). A variable without a `units`
+  attr, and a .npy array, are taken as in the scene's units.
 - Each failure is one `InputError` that names the field and says what was expected: no
   such file, an unknown format, no `var` (netCDF, Zarr) or a `var` (.npy), no such
   variable (the message lists the file's variables), the wrong dims, shape or
@@ -506,8 +512,13 @@ def render() -> str:
                  "the half spaces x2 > 0 and x2 < 0, instead of `[material]`; two different materials are refused "
                  "until their interface is implemented"))
     lines += key_table(rows)
-    lines += ["", "## `[units]`", "", "All three or none; default `\"1\"` each (a dimensionless scene). The strings are "
-              "written to the output's `units` attrs as given.", ""]
+    lines += ["", "## `[units]`", "", "All three or none; default `\"1\"` each (a dimensionless scene). Each is a "
+              "UDUNITS-2 unit string, the units the CF conventions write (parsed by cf-units), that is a positive "
+              "multiple of its quantity's SI unit (m, s, Pa): `\"km\"`, `\"ms\"`, `\"MPa\"`, `\"bar\"`; or "
+              "`\"1\"`, that quantity dimensionless. Anything else is refused with the key named: a string UDUNITS "
+              "does not know (`\"banana\"`), a unit of another quantity (a stress in `\"m\"`), an offset or "
+              "negative unit, a date (`\"s since 2000-01-01\"`). The strings are written to the output's `units` "
+              "attrs as given.", ""]
     lines += key_table([(f"`{k}`", "string", key.unit, key.accepted, '`"1"`', key.doc)
                         for k, key in UNIT_KEYS.items()])
     classes = section_classes()
