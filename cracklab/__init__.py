@@ -18,7 +18,7 @@ from .analysis import energy  # noqa: E402
 from .ensemble import open_ensemble, register_builder  # noqa: E402
 from .errors import InputError, SimulationError  # noqa: E402
 from .model.grid import Grid  # noqa: E402
-from .laws import LinearCohesive, PrescribedRupture, SlipWeakening, TractionFree  # noqa: E402
+from .laws import LAWS as _LAWS  # noqa: E402
 from .model.loading import Loading, point_load  # noqa: E402
 from .model.material import Material  # noqa: E402
 from .analysis.modal import modal_response  # noqa: E402
@@ -26,9 +26,12 @@ from .model.record import Record  # noqa: E402
 from .model.scene import Numerics, Scene  # noqa: E402
 from .output.simulate import scene_of, simulate, stations  # noqa: E402
 
+#: every law of cracklab.laws, by its class name (LinearCohesive, SlipWeakening, ...)
+globals().update({_law.__name__: _law for _law in _LAWS.values()})
+
 __all__ = [
-    "Grid", "InputError", "LinearCohesive", "Loading", "Material", "Numerics", "PrescribedRupture",
-    "Record", "Scene", "SimulationError", "SlipWeakening", "TractionFree", "analysis", "ensemble",
+    "Grid", "InputError", "Loading", "Material", "Numerics",
+    "Record", "Scene", "SimulationError", "analysis", "ensemble",
     "kernels", "modal_response", "open_ensemble", "register_builder",
     "point_load", "scene_of", "scenes", "simulate", "stations", "__version__",
-]
+] + sorted(_law.__name__ for _law in _LAWS.values())

@@ -59,6 +59,7 @@ from ..errors import InputError
 from ..laws.base import cell_area_and_width, failed_length
 from ..model.record import Record
 from ..solver.halfspace import active_channels, split_channels
+from ..solver.interfaces import interface_type
 
 __all__ = ["energy_record", "energy_budget", "strain_energy", "static_stiffness", "budget_summary"]
 
@@ -231,9 +232,9 @@ def energy_budget(ds, *, scene=None, flux: bool = True, rule: str = "auto", chun
         scene = scene_of(ds)
     grid, mat, law, load = scene.grid, scene.material, scene.law, scene.loading
     comps = scene.components
-    if scene.materials[0] != scene.materials[1]:
-        raise InputError("materials", "energy_budget covers an interface between two half spaces of one material; "
-                                      "this scene has two (the bimaterial budget is not implemented)")
+    refusal = interface_type(scene.materials).energy_refusal
+    if refusal is not None:
+        raise InputError("materials", refusal)
     if grid.free_surface:
         raise InputError("grid.free_surface", "energy_budget covers the periodic plane; a half plane below a "
                                               "free surface (mirror symmetry) is not implemented: run the doubled "

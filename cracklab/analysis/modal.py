@@ -86,6 +86,7 @@ import numpy as np
 import xarray as xr
 
 from ..errors import InputError
+from ..solver.schemes import scheme_of
 
 __all__ = [
     "MODES",
@@ -97,6 +98,7 @@ __all__ = [
     "PRODUCT_CONVOLUTIONS",
     "MAX_STEPS",
     "modal_response",
+    "scheme_response",
     "implicit_coefficient",
     "product_weights",
     "eta_hat",
@@ -404,6 +406,15 @@ def _coefficients(mode, gamma, nu, formulation, integration, xk0):
     # r_n = 1 - g Z0 d_n + g (xk_0 r_n + hist)
     B = g * xk0 if integration == "explicit" else g * (xk0 - 0.5 * z0)
     return g, z0, B
+
+
+def scheme_response(scheme, mode, *, gamma, T_end, nu=0.25) -> xr.DataArray:
+    """:func:`modal_response` of a grid time scheme (``scheme``: a name of
+    ``cracklab.solver.schemes.SCHEMES`` or the scheme), with the single-mode recurrence the
+    scheme declares (``Scheme.modal``: formulation, convolution, integration)."""
+    formulation, convolution, integration = scheme_of(scheme).modal
+    return modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
+                          convolution=convolution, integration=integration)
 
 
 def implicit_coefficient(mode, *, gamma, nu=0.25, formulation="displacement",

@@ -1,9 +1,16 @@
 """Direct history engine: full (or windowed) ring buffer per mode."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..solver.weights import convolution_weights
+from .base import register
+
+#: doubles of temporaries per weight while exact weights are computed (measured: the
+#: product rule's integrals take about 205, the other rules about 20; solver/budget.py)
+_WEIGHT_TEMPS = {"product": 210, "other": 22}
 
 
 def deliver(flat, shape, out=None, scale=None):
@@ -17,6 +24,7 @@ def deliver(flat, shape, out=None, scale=None):
     return out
 
 
+@register
 class DirectEngine:
     """Direct evaluation of S_n = sum_j w_j x_{n-j}, O(n) work per mode and step.
 
@@ -33,9 +41,38 @@ class DirectEngine:
     """
 
     name = "direct"
+    windowed = True         # it keeps a truncated history (window)
+    flat_cost = False       # its step grows with the history
+    CHUNK = 256             # the growth step of its buffer and weight table (``chunk``)
+
+    @classmethod
+    def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
+        """(bytes held, extra bytes while it grows) of one direct engine of a half space of
+        ``material`` over a run of ``scene`` (its window's length, if shorter)."""
+        from ..solver.budget import gammas_sample, modes
+        from ..solver.stability import mode_gamma
+        from .tables import max_bytes
+
+        grid = scene.grid
+        M = modes(grid)
+        length = scene.nsteps + 1
+        if scene.numerics.window is not None:
+            gmin = mode_gamma(2 * np.pi / max(grid.L1, grid.L3 if not grid.plane else 0.0), material.cs, scene.dt)
+            length = min(length, int(math.ceil(scene.numerics.window / gmin)) + 1)
+        chunk = cls.CHUNK
+        rows = int(math.ceil(length / chunk)) * chunk
+        buf = 2 * length * M * 16          # the doubled ring; its rows past the history stay untouched
+        weights = rows * 2 * M * 8
+        g, weight = gammas_sample(grid, scene.dt, material.cs)
+        distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
+        table = min(max_bytes(), distinct * rows * 8)
+        temps = _WEIGHT_TEMPS["product" if scheme.rule == "product" else "other"]
+        # growing: the old buffer beside the new one, the weights concatenated, the next
+        # chunk of weights computed
+        return int(buf + weights + table), int(max(buf // 4 + weights, chunk * distinct * 8 * temps))
 
     def __init__(self, *, kernel, gamma, nu, rule="trapezoid", formulation="displacement",
-                 lag=0, window=None, chunk=256, threads=1, nsteps=None):
+                 lag=0, window=None, chunk=CHUNK, threads=1, nsteps=None):
         self.kernel, self.nu, self.rule, self.formulation = kernel, nu, rule, formulation
         self.shape = np.shape(gamma)
         self.gamma = np.asarray(gamma, dtype=float).ravel()

@@ -50,6 +50,7 @@ from ..errors import InputError
 from ..solver.kernels import FACE_KERNELS
 from ..solver.weights import FORMULATIONS, RULES, convolution_weights, product_taps
 from . import tables
+from .base import register
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
 
@@ -219,6 +220,12 @@ def backend_choice():
 
 
 # ----------------------------------------------------------------------------- engine
+#: doubles of temporaries per exact tap weight while they are computed (half the direct
+#: engine's: its states are not yet resident; solver/budget.py)
+_TAP_TEMPS = {"product": 110, "other": 12}
+
+
+@register
 class ExponentialEngine:
     """History engine with O(P) work and memory per mode and step (see the module docstring).
 
@@ -231,6 +238,32 @@ class ExponentialEngine:
     """
 
     name = "exponential"
+    windowed = False        # it keeps the whole history
+    flat_cost = True
+
+    @classmethod
+    def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
+        """(bytes held, extra bytes while it is built) of one exponential engine (numba
+        backend) of a half space of ``material`` over a run of ``scene``."""
+        from ..solver.budget import gammas_sample, modes
+        from ..solver.stability import mode_gamma
+
+        grid = scene.grid
+        M = modes(grid)
+        g, weight = gammas_sample(grid, scene.dt, material.cs)
+        gmax = mode_gamma(grid.q_max(), material.cs, scene.dt)
+        T_end = None if gmax == 0 else gmax * (scene.nsteps + 2)
+        pairs = get_fit(kernel, material.nu, scheme.convolves, T0=ENGINE_T0, T_end=T_end).pairs
+        jd = direct_taps(g, scheme.lag, ENGINE_T0, extra=_SHIFT.get(scheme.rule, 0), minimum=_BLOCK)
+        long_taps = float(jd[jd > _BLOCK].sum()) * weight          # modes with their own ring
+        distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
+        taps = float(jd.sum()) / jd.size * distinct         # exact weights, per distinct gamma
+        held = (M * pairs * 8 * 8                 # 4 state arrays, 4 recursion tables (re, im)
+                + M * (2 * _BLOCK * 16 + _BLOCK * 8 + 2 * 8)    # last inputs, tail sums, taps, indices
+                + long_taps * 24 + taps * 8 * (2 if scheme.rule == "product" else 1))
+        temps = _TAP_TEMPS["product" if scheme.rule == "product" else "other"]
+        building = max(distinct * pairs * 16 * 4 + M * 8 * 6 + M * pairs * 8, taps * 8 * temps)
+        return int(held), int(building)
 
     def __init__(self, *, kernel, gamma, nu, rule="trapezoid", formulation="displacement",
                  lag=0, window=None, chunk=256, threads=1, nsteps=None):

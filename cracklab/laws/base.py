@@ -2,7 +2,8 @@
 
 A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 
-* class attributes: ``kind`` (its TOML name, by which it registers), ``components``
+* class attributes: ``kind`` (its TOML name, by which it registers), ``example`` (a small
+  TOML scene of the law, which docs/toml.md shows), ``components``
   (the components it acts on: NORMAL, SHEAR or ALL), ``reads_slip`` (whether ``update``
   reads the slip), ``state_variables`` ({name: (long_name, unit)}: what of its state the
   recorder can record by name);
@@ -26,10 +27,11 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_fields_nesting
 from .solve import solve_velocity
 
 NORMAL = (2,)
@@ -114,10 +116,40 @@ def failed_length(failed, cell_area: float, width: float):
     return failed * cell_area / width
 
 
+def _checked(post_init):
+    """``post_init`` preceded by the check of the law's values' nesting (one InputError
+    naming law.<field>), made once: by the outermost of the calls a law's ``__post_init__``
+    makes up its classes (a law's own checks may call its base class's)."""
+    @functools.wraps(post_init)
+    def __post_init__(self):
+        if type(self).__post_init__ is __post_init__:
+            check_fields_nesting(self, "law")
+        post_init(self)
+
+    __post_init__.nesting_checked = True
+    return __post_init__
+
+
 class Law:
     """Defaults of the interface-law protocol (see the module docstring)."""
 
+    def __init_subclass__(cls, **kwargs):
+        """A law's own ``__post_init__`` (its checks) runs after the check of its values'
+        nesting, which every law gets without calling it."""
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__.get("__post_init__")
+        if own is not None and not getattr(own, "nesting_checked", False):
+            cls.__post_init__ = _checked(own)
+
+    @_checked
+    def __post_init__(self):
+        """Checks of the parameters made when the law is built (a law writes its own; the
+        nesting of its values is checked before them)."""
+
     kind = ""
+    #: a small, valid TOML scene of the law (docs/toml.md shows it under the law,
+    #: tests/docs/test_toml_page.py runs it; docs/tools/toml_page.py stops without one)
+    example = ""
     components = ALL
     reads_slip = True
     contact = False

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_fields_nesting
+from ..errors import InputError
 from .base import ALL, SHEAR, Law, bonded_mask, check_parameter, parameter
 from .solve import solve_normal_first, solve_velocity
 
@@ -35,11 +35,47 @@ class CoupledCohesive(Law):
     reads_slip = True
     contact = True
     kind = "coupled_cohesive"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# Modes I and II softening together in the plane problem: a crack of nodes 0-2
+# and 13-15 (across the periodic boundary) under a mixed, ramped load
+name = "coupled_cohesive_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 1
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "coupled_cohesive"
+tau_c = 1.0
+tau_s = 1.0
+delta_c = 0.02
+beta = 1.0
+mu_f = 0.3
+initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
+                 [false], [false], [false], [false], [false], [true], [true], [true]]
+
+[loading]
+tau0_1 = 0.3
+tau0_2 = 0.3
+time = "ramp"
+ramp_time = 0.1
+
+[record]
+fields = ["delta_1", "delta_2", "lambda_max"]
+"""
     components = ALL
     state_variables = {"lambda_max": ("largest effective opening reached", "length")}
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         check_parameter(self, "tau_c", allow_equal=True)
         check_parameter(self, "tau_s", allow_equal=True)
         check_parameter(self, "delta_c")

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_fields_nesting
+from ..errors import InputError
 from .base import NORMAL, Law, bonded_mask, check_parameter, parameter
 
 
@@ -25,12 +25,43 @@ class LinearCohesive(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = True  # its update reads delta
     kind = "linear_cohesive"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# A mode I crack in the plane problem: nodes 0-2 and 13-15 (the crack across the
+# periodic boundary) broken at t = 0, the plane under a suddenly applied tension
+name = "linear_cohesive_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 1
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "linear_cohesive"
+tau_c = 1.0
+delta_c = 0.01
+initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
+                 [false], [false], [false], [false], [false], [true], [true], [true]]
+
+[loading]
+tau0_2 = 0.4
+
+[record]
+fields = ["delta_2", "delta_max"]
+every = 4
+"""
     components = NORMAL
     contact = True
     state_variables = {"delta_max": ("largest opening reached", "length")}
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         check_parameter(self, "tau_c")
         check_parameter(self, "delta_c")
 

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_fields_nesting
+from ..errors import InputError
 from .base import ALL, Law, bonded_mask, check_parameter, parameter
 
 
@@ -32,11 +32,45 @@ class PrescribedRupture(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "prescribed_rupture"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# Kostrov's crack: the strength drops from infinity to 0 as a circle growing at
+# 0.7 cs from the centre passes, over 0.05 time units
+name = "prescribed_rupture_example"
+t_end = 0.5
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 32
+n3 = 32
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "prescribed_rupture"
+speed = 0.7
+origin = [0.5, 0.5]
+residual = 0.0
+strength_before = inf
+weakening_time = 0.05
+
+[loading]
+tau0_1 = 1.0
+
+[record]
+fields = ["delta_1"]
+
+[record.stations]
+centre = [0.5, 0.5]
+"""
     components = ALL
     contact = False
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         check_parameter(self, "speed")
         check_parameter(self, "residual", allow_equal=True)
         check_parameter(self, "strength_before", allow_equal=True, allow_inf=True)

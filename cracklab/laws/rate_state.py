@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, SimulationError, check_fields_nesting
+from ..errors import InputError, SimulationError
 from .base import SHEAR, bonded_mask, check_parameter, parameter
 from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 from .solve import solve_velocity
@@ -529,10 +529,58 @@ class RateState(Friction):
     normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "rate_state"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# TPV101 on a coarse grid (600 m): ageing law, sliding at 1e-12 m/s under 75 MPa,
+# nucleated by a 25 MPa patch of radius 3 km that grows over 1 s
+name = "rate_state_example"
+t_end = 2.0
+
+[units]
+length = "m"
+time = "s"
+stress = "Pa"
+
+[material]
+mu = 3.2038e10
+cs = 3464.0
+nu = 0.25
+
+[grid]
+n1 = 64
+n3 = 32
+L1 = 38400.0
+L3 = 19200.0
+
+[law]
+kind = "rate_state"
+a = 0.008
+b = 0.012
+L = 0.02
+V0 = 1e-6
+f0 = 0.6
+sigma_n = 120e6
+V_ini = 1e-12
+evolution = "ageing"
+
+[loading]
+tau0_1 = 75e6
+nucleation_dtau_1 = 25e6
+nucleation_radius = 3000.0
+nucleation_time = 1.0
+nucleation_x1 = 19200.0
+nucleation_x3 = 9600.0
+
+[record]
+fields = ["v_1", "psi"]
+every = 10
+
+[record.stations]
+hypocentre = [19200.0, 9600.0]
+"""
     state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1"), **NORMAL_STATE}
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         for name in ("a", "b", "L", "V0"):
             check_parameter(self, name)
         _check_finite(self, "f0")

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_fields_nesting
+from ..errors import InputError
 from .base import SHEAR, bonded_mask, check_parameter, parameter
 from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 
@@ -31,10 +31,51 @@ class SlipWeakening(Friction):
     normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "slip_weakening"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# A TPV3-like fault on a coarse grid (about 470 m): slip weakening under 120 MPa,
+# nucleated from t = 0 by a shear stress raised up to 30 MPa within 3 km
+name = "slip_weakening_example"
+t_end = 1.0
+
+[units]
+length = "m"
+time = "s"
+stress = "Pa"
+
+[material]
+mu = 3.2038e10
+cs = 3464.0
+nu = 0.25
+
+[grid]
+n1 = 64
+n3 = 32
+L1 = 30000.0
+L3 = 15000.0
+
+[law]
+kind = "slip_weakening"
+mu_s = 0.677
+mu_d = 0.525
+D_c = 0.4
+sigma_n = 120e6
+
+[loading]
+tau0_1 = 70e6
+nucleation_dtau_1 = 30e6
+nucleation_radius = 3000.0
+nucleation_time = 0.0
+nucleation_x1 = 15000.0
+nucleation_x3 = 7500.0
+
+[record]
+fields = ["v_1", "slip"]
+every = 5
+"""
     state_variables = {"slip": ("slip path", "length"), **NORMAL_STATE}
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         check_parameter(self, "mu_s", allow_equal=True)
         check_parameter(self, "mu_d", allow_equal=True)
         check_parameter(self, "D_c")

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, check_fields_nesting
+from ..errors import InputError
 from .base import ALL, Law, bonded_mask, parameter
 
 
@@ -18,10 +18,37 @@ class TractionFree(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "traction_free"
+    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    example = """\
+# A traction-free plane under a uniform step of tension: it opens everywhere,
+# at the rate 2 cs tau0_2 / (mu a) (the radiation damping of mode I)
+name = "traction_free_example"
+t_end = 0.2
+
+[material]
+mu = 1.0
+cs = 1.0
+nu = 0.25
+
+[grid]
+n1 = 16
+n3 = 16
+L1 = 1.0
+L3 = 1.0
+
+[law]
+kind = "traction_free"
+contact = false
+
+[loading]
+tau0_2 = 1.0
+
+[record]
+fields = ["delta_2", "v_2"]
+"""
     components = ALL
 
     def __post_init__(self):
-        check_fields_nesting(self, "law")
         if not isinstance(self.contact, (bool, np.bool_)):
             raise InputError("law.contact", f"must be true or false, got {self.contact!r}")
 

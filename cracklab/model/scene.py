@@ -13,6 +13,7 @@ from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
 from .record import FIELDS, Record, face_field
+from ..solver.interfaces import interface_type
 from ..solver.schemes import SCHEMES
 from .units import check_scene_units
 from ..solver.stability import beta_max, gamma_limit
@@ -24,9 +25,6 @@ MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before
 MAX_SNAPSHOTS = 10**7
 MIRROR_ROUNDOFF = 1e-12     # |tau0_3| on the lines of a free surface's mirror, relative to max |tau0_3|
 DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
-#: of two different materials, the stable limit is this fraction of the smaller side's
-#: (measured on the traction-free mixed-mode faces: stable at 0.9, growing from 0.97)
-BIMATERIAL_MARGIN = 0.9
 
 
 def resolve_formulation(formulation: str, components) -> str:
@@ -83,8 +81,9 @@ class Numerics:
                              f"must be one of {('auto',) + tuple(FORMULATIONS)}, got {self.formulation!r}")
         if self.window is not None:
             check_positive("numerics.window", self.window)
-            if self.engine not in ("direct", "auto"):
-                raise InputError("numerics.window", f"a truncated history needs engine 'direct' "
+            if self.engine != "auto" and not ENGINES[self.engine].windowed:
+                windowed = " or ".join(repr(name) for name, cls in ENGINES.items() if cls.windowed)
+                raise InputError("numerics.window", f"a truncated history needs engine {windowed} "
                                                     f"(engine {self.engine!r} keeps the whole history)")
         check_positive("numerics.rupture_threshold", self.rupture_threshold, allow_zero=True)
         _check_threads("numerics.fft_threads", self.fft_threads)
@@ -147,9 +146,9 @@ class Scene:
         if self.beta is not None:
             object.__setattr__(self, "beta", check_positive("beta", self.beta))
         self._check_shapes()
-        if self.two_materials and FORMULATIONS[self.formulation] != "product":
-            raise InputError("numerics.formulation", f"a pair of different materials runs the product scheme "
-                                                     f"('product' or 'product2'); got {self.formulation!r}")
+        kind = self.interface_type
+        if not kind.accepts_scheme(self.formulation):
+            raise InputError("numerics.formulation", kind.scheme_error(self.formulation))
         active = self.components
         if not active:
             raise InputError("loading", f"no load on a component the law {self.law.kind!r} acts on "
@@ -180,8 +179,7 @@ class Scene:
             raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme at nu = "
                                      f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
                                      f"q_max c_s dt = {g:.4g}, docs/stability.md"
-                                     + (f"; of two materials {BIMATERIAL_MARGIN:g} of the smaller side's limit"
-                                        if self.two_materials else "")
+                                     + kind.margin_note()
                                      + f"), got {self.beta!r}; "
                                      f"without beta a scene takes min({DEFAULT_BETA}, the limit)")
         steps = self.t_end / self.dt
@@ -218,7 +216,7 @@ class Scene:
 
     def _check_face_field(self, name, c, active):
         """A face's own motion is held on a bimaterial interface, for the components its faces carry."""
-        if self.materials[0] == self.materials[1]:
+        if not self.interface_type.holds_faces:
             raise InputError("record.fields", f"{name!r}: each face's own motion is computed on a bimaterial "
                                               f"interface (materials = (top, bottom), two different materials); "
                                               f"with one material the shear faces move as +-delta/2")
@@ -299,12 +297,18 @@ class Scene:
     @property
     def beta_max(self) -> float:
         """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability);
-        of two different materials, BIMATERIAL_MARGIN times the smaller of the two sides'
+        of two different materials, the interface's margin (0.9) times the smaller of the two sides'
         limits (the coupled faces grew at 0.97-1.0 of it: docs/performance.md,
         "Bimaterial interface")."""
         comps = self.components
         limit = min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
-        return limit * (BIMATERIAL_MARGIN if self.two_materials else 1.0)
+        return limit * self.interface_type.margin
+
+    @property
+    def interface_type(self) -> type:
+        """The type of the interface between the scene's two half spaces (solver/interfaces):
+        what it accepts, its stability margin."""
+        return interface_type(self.materials)
 
     @property
     def two_materials(self) -> bool:

@@ -22,21 +22,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MemoryBudgetError
+from .stability import mode_gamma
 
 #: resident memory of a fresh process running a member (interpreter, numpy, xarray,
 #: zarr, numba, pyfftw and the compiled loops): the baseline of a sweep's worker
 PROCESS_BYTES = 400 << 20
 #: env variable capping the memory cracklab counts as available ("8GB", "512MB", bytes)
 LIMIT_ENV = "CRACKLAB_MEMORY_LIMIT"
-_CHUNK = 256            # the direct engine's growth step (history/direct.py)
-_BLOCK = 8              # the exponential engine's block of direct taps (history/exponential.py)
 _FLUSH = 8              # snapshots the recorder keeps before writing them to the store
-_CACHE = 256 << 20      # the kernel-table cache bound (history/tables.py)
-#: doubles of temporaries per weight while exact weights are computed (measured: the
-#: product rule's integrals take about 205, the other rules about 20), for the direct
-#: engine's tables and the exponential engine's taps (half: its states are not yet resident)
-_WEIGHT_TEMPS = {"product": 210, "other": 22}
-_TAP_TEMPS = {"product": 110, "other": 12}
 
 
 @dataclass(frozen=True)
@@ -82,12 +75,13 @@ def parse_bytes(text) -> int:
     return int(float(m.group(1)) * 1024 ** " kmgt".index(m.group(2) or " "))
 
 
-def _modes(grid) -> int:
+def modes(grid) -> int:
+    """Fourier modes of the grid's spectra (what an engine holds a history for)."""
     s = grid.spectral_shape
     return int(s[0]) * int(s[1])
 
 
-def _gammas(grid, dt, cs, limit=1 << 20):
+def gammas_sample(grid, dt, cs, limit=1 << 20):
     """(sample of gamma = q c_s dt over the modes, weight of each sampled mode): every mode
     for grids of up to ``limit`` modes, else a regular subsample of the two axes."""
     k, m = grid._axes()
@@ -95,74 +89,30 @@ def _gammas(grid, dt, cs, limit=1 << 20):
     step = max(1, int(math.ceil(math.sqrt(total / limit))))
     ks, ms = k[::step], m[::step]
     q = np.sqrt(ks[:, None] ** 2 + ms[None, :] ** 2).ravel()
-    return q * cs * dt, total / q.size
-
-
-def _exponential_bytes(grid, scene, kernel, scheme) -> tuple[int, int]:
-    """(bytes held, extra bytes while it is built) of one exponential engine (numba backend)."""
-    from ..history.exponential import ENGINE_T0, _SHIFT, direct_taps
-    from ..history.fit import get_fit
-
-    M = _modes(grid)
-    g, weight = _gammas(grid, scene.dt, scene.material.cs)
-    gmax = grid.q_max() * scene.material.cs * scene.dt
-    T_end = None if gmax == 0 else gmax * (scene.nsteps + 2)
-    pairs = get_fit(kernel, scene.material.nu, scheme.convolves, T0=ENGINE_T0, T_end=T_end).pairs
-    jd = direct_taps(g, scheme.lag, ENGINE_T0, extra=_SHIFT.get(scheme.rule, 0), minimum=_BLOCK)
-    long_taps = float(jd[jd > _BLOCK].sum()) * weight          # modes with their own ring
-    distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
-    taps = float(jd.sum()) / jd.size * distinct         # exact weights, per distinct gamma
-    held = (M * pairs * 8 * 8                 # 4 state arrays, 4 recursion tables (re, im)
-            + M * (2 * _BLOCK * 16 + _BLOCK * 8 + 2 * 8)    # last inputs, tail sums, taps, indices
-            + long_taps * 24 + taps * 8 * (2 if scheme.rule == "product" else 1))
-    temps = _TAP_TEMPS["product" if scheme.rule == "product" else "other"]
-    building = max(distinct * pairs * 16 * 4 + M * 8 * 6 + M * pairs * 8, taps * 8 * temps)
-    return int(held), int(building)
-
-
-def _direct_bytes(grid, scene, scheme, window_steps=None) -> tuple[int, int]:
-    """(bytes held, extra bytes while it grows) of one direct engine."""
-    M = _modes(grid)
-    length = scene.nsteps + 1 if window_steps is None else min(scene.nsteps + 1, window_steps)
-    cap = _CHUNK
-    while cap < length:
-        cap *= 2
-    rows = int(math.ceil(length / _CHUNK)) * _CHUNK
-    buf = 2 * length * M * 16          # the doubled ring; its rows past the history stay untouched
-    weights = rows * 2 * M * 8
-    g, weight = _gammas(grid, scene.dt, scene.material.cs)
-    distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
-    table = min(_CACHE, distinct * rows * 8)
-    temps = _WEIGHT_TEMPS["product" if scheme.rule == "product" else "other"]
-    # growing: the old buffer beside the new one, the weights concatenated, the next
-    # chunk of weights computed
-    return int(buf + weights + table), int(max(buf // 4 + weights, _CHUNK * distinct * 8 * temps))
+    return mode_gamma(q, cs, dt), total / q.size
 
 
 def run_memory(scene, *, store=True) -> MemoryEstimate:
     """The memory a run of ``scene`` needs, estimated from the scene (``store``: the run
     streams its snapshots to a store and keeps a few in memory; False: it keeps them all)."""
-    from ..history import resolve_engine
-    from .halfspace import active_channels
-    from .schemes import SCHEMES
+    from ..history import ENGINES, resolve_engine
+    from .interfaces import interface_type
+    from .schemes import scheme_of
 
     grid = scene.grid
     comps = scene.components
-    scheme = SCHEMES[scene.formulation]
-    engine = resolve_engine(scene.numerics.engine, scene.numerics.window)
-    channels = active_channels(grid.plane, comps)
+    scheme = scheme_of(scene.formulation)
+    engine = ENGINES[resolve_engine(scene.numerics.engine, scene.numerics.window)]
+    # (kernel, material) of each engine the scene's interface builds (the identical pair: one
+    # per channel the active components drive)
+    channels = interface_type(scene.materials).engine_channels(scene)
     history, building = 0, 0
-    window_steps = None
-    if scene.numerics.window is not None:
-        gmin = 2 * np.pi / max(grid.L1, grid.L3 if not grid.plane else 0.0) * scene.material.cs * scene.dt
-        window_steps = int(math.ceil(scene.numerics.window / gmin)) + 1
-    for kernel in channels:
-        held, extra = (_exponential_bytes(grid, scene, kernel, scheme) if engine == "exponential"
-                       else _direct_bytes(grid, scene, scheme, window_steps))
+    for kernel, material in channels:
+        held, extra = engine.memory(scene, kernel, scheme, material)
         history += held
         building = max(building, extra)
     N = grid.shape[0] * grid.shape[1]
-    M = _modes(grid)
+    M = modes(grid)
     nc = len(comps)
     shear3d = not grid.plane and any(c in comps for c in (1, 3))
     # per component: slip, rate, traction, f, trial slip and two temporaries of a step;

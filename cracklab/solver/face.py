@@ -17,7 +17,8 @@ import numpy as np
 
 from ..history import make_engine
 from .halfspace import predict_channel
-from .schemes import SCHEMES
+from .schemes import scheme_of
+from .stability import mode_gamma
 
 #: channel -> (kernel, the velocity it convolves)
 CHANNELS = {"L": ("H11", "L"), "N": ("H22", "N"), "LN": ("H12", "N"), "NL": ("H12", "L"), "T": ("III", "T")}
@@ -25,15 +26,16 @@ CHANNELS = {"L": ("H11", "L"), "N": ("H22", "N"), "LN": ("H12", "N"), "NL": ("H1
 
 class Face:
     """The face of one half space of ``material`` (``inplane``: the L, N channels and their
-    coupling; ``transverse``: the T channel); ``sign`` +1 for the top, -1 for the bottom."""
+    coupling; ``transverse``: the T channel); ``sign`` +1 for the top, -1 for the bottom;
+    ``scheme``: a product scheme (its name or the scheme)."""
 
     def __init__(self, material, grid, dt, q, *, sign, inplane, transverse, engine="direct", window=None,
-                 nsteps=None, threads=None):
+                 nsteps=None, threads=None, scheme="product"):
         self.material = material
         self.sign = float(sign)
         self.dt = dt
-        scheme = SCHEMES["product"]
-        gamma = q * material.cs * dt
+        scheme = scheme_of(scheme)
+        gamma = mode_gamma(q, material.cs, dt)
         names = (("L", "N", "LN", "NL") if inplane else ()) + (("T",) if transverse else ())
         self.channels = {}
         for name in names:

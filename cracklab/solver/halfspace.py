@@ -36,8 +36,9 @@ import numpy as np
 from ..history import make_engine
 from .loops import (mirror_rotate, mirror_separate, mirror_shear_correct, mirror_shear_predict, plus_product,
                     product_predict, rotate, shear_correct, shear_predict)
-from .schemes import SCHEMES, Channel
+from .schemes import Channel, scheme_of
 from .spectral import Transforms
+from .stability import mode_gamma
 
 
 def active_channels(plane: bool, components) -> tuple:
@@ -87,7 +88,8 @@ def predict_channel(ch, V, n, dt, out=None):
 class HalfSpace:
     """Maps the displacement (and velocity) history of its face to f_j, Eq. (3), times ``scale``.
 
-    ``material``: its material; ``formulation``: the time scheme (solver/schemes);
+    ``material``: its material; ``formulation``: the time scheme (solver/schemes: its name or
+    the scheme);
     ``rule``: the displacement scheme's convolution rule (the others have their own);
     ``engine``, ``window``, ``nsteps``, ``threads``: its history engines
     (cracklab.history.make_engine); ``transforms``: the FFTs it shares.
@@ -98,7 +100,6 @@ class HalfSpace:
         self.material = material
         self.scale = scale
         self.components = tuple(sorted(components))
-        self.formulation = formulation
         self.fft = transforms or Transforms(grid)
         k, m = grid.wavenumbers()
         q = np.sqrt(k**2 + m**2)
@@ -106,17 +107,18 @@ class HalfSpace:
         with np.errstate(invalid="ignore", divide="ignore"):
             self.c = np.where(q > 0, k / q, 0.0)
             self.s = np.where(q > 0, m / q, 0.0)
-        gamma = q * material.cs * dt
+        gamma = mode_gamma(q, material.cs, dt)
         nu = material.nu
         self.shear3d = (not grid.plane) and any(c in self.components for c in (1, 3))
         #: a free surface: the shear pair (1, 3) goes through one transform of the doubled cell,
         #: its separation and joining fused with the rotations (solver/spectral.py, loops.mirror_*)
         self.pair = self.shear3d and self.fft.mirror
         self.dt = dt
-        scheme = SCHEMES[formulation]
+        scheme = scheme_of(formulation)
         self.scheme = scheme
+        self.formulation = scheme.name
         # the displacement formulation takes any rule of its weights; the others have their own
-        rule = rule if formulation == "displacement" else scheme.rule
+        rule = rule if scheme.any_rule else scheme.rule
 
         def channel(kernel):
             eng = make_engine(engine, kernel=kernel, gamma=gamma, nu=nu, rule=rule, formulation=scheme.convolves,
@@ -289,7 +291,7 @@ class HalfSpace:
         n = self.n
         D = self._forward(delta)
         F = {}
-        displacement = self.formulation == "displacement"
+        displacement = self.scheme.convolves == "displacement"
         if displacement:
             for name, ch in self.channels.items():  # the prefactor with the 1/N of the inverse FFT
                 F[name] = ch.engine.push(D[name], out=self._S[name], scale=self._pre_n[name])

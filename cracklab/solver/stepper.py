@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,8 +11,9 @@ import numpy as np
 from ..errors import SimulationError
 from ..laws.base import cell_area_and_width, failed_length
 from .interfaces import for_scene as interface_for_scene
-from .schemes import SCHEMES
+from .schemes import Run, scheme_of
 from .spectral import Transforms
+from .stability import mode_gamma
 
 # Growth detectors (Stepper._check). Fast: the run stops when max |v| grew by more than
 # GROWTH_FACTOR over the last GROWTH_WINDOW steps and exceeds GROWTH_BOUND times the
@@ -49,6 +51,13 @@ class State:
     faces: object = None
 
 
+def _weak(method):
+    """``method`` of an object, called through a weak reference to it: what the Stepper hands
+    its Run makes no reference cycle (the Stepper's arrays and engines are freed with it)."""
+    ref, name = weakref.ref(method.__self__), method.__name__
+    return lambda *args: getattr(ref(), name)(*args)
+
+
 def _copy(x):
     if isinstance(x, dict):
         return {k: _copy(a) for k, a in x.items()}
@@ -66,19 +75,24 @@ class Stepper:
 
     def __init__(self, scene, response=None, start=None):
         self.scene = scene
-        grid, comps = scene.grid, scene.components
+        grid, comps, law = scene.grid, scene.components, scene.law
         self.comps = comps          # scene.components tests the load fields: once, not every step
         self._area_width = cell_area_and_width(grid)  # for the crack length of constant-K loading
-        self.scheme = SCHEMES[scene.formulation]
+        self.scheme = scheme = scheme_of(scene.formulation)
         if response is None:
-            response = interface_for_scene(scene, Transforms(grid, scene.numerics.fft_threads))
+            response = interface_for_scene(scene, Transforms(grid, scene.numerics.fft_threads), scheme=scheme)
         self.response = response
-        self.load = scene.loading
+        # the product schemes' trial slips, where the law (or contact) reads the slip
+        trial_slips = scheme.needs_trial_slips and reads_slip(law, comps)
+        #: what the scheme reads and writes of the run (its state after the last step taken)
+        self.run = Run(response=response, law=law, grid=grid, dt=scene.dt, comps=comps, eta=response.eta,
+                       load=scene.loading, delta={c: np.zeros(grid.shape) for c in comps},
+                       v={c: np.zeros(grid.shape) for c in comps}, tau=None, lstate=law.init_state(grid),
+                       trial_slips=trial_slips,
+                       work={c: np.empty(grid.shape) for c in comps} if trial_slips else None,
+                       vmean={c: np.empty(grid.shape) for c in comps} if scheme.mean_velocity else None,
+                       update_law=_weak(self.update_law), crack_length=_weak(self.crack_length))
         self.n = 0                  # the next step to take
-        self.delta = {c: np.zeros(grid.shape) for c in comps}
-        self.v = {c: np.zeros(grid.shape) for c in comps}
-        self.tau = None
-        self.lstate = scene.law.init_state(grid)
         self.l0 = None
         # growth detector: max |v| of the last GROWTH_WINDOW steps, running load velocity scale
         self.vmax = np.zeros(GROWTH_WINDOW)
@@ -89,6 +103,14 @@ class Stepper:
         self._vunit = base * scene.material.cs / scene.material.mu
         if start is not None:
             self.set_state(start)
+
+    # the run's state lives in ``run`` (what the scheme is handed)
+    delta = property(lambda self: self.run.delta, lambda self, x: setattr(self.run, "delta", x))
+    v = property(lambda self: self.run.v, lambda self, x: setattr(self.run, "v", x))
+    tau = property(lambda self: self.run.tau, lambda self, x: setattr(self.run, "tau", x))
+    lstate = property(lambda self: self.run.lstate, lambda self, x: setattr(self.run, "lstate", x))
+    load = property(lambda self: self.run.load, lambda self, x: setattr(self.run, "load", x))
+    eta = property(lambda self: self.run.eta)
 
     def get_state(self) -> dict:
         """Everything needed to continue after the last step taken (arrays copied)."""
@@ -117,30 +139,24 @@ class Stepper:
 
     def _run(self):
         """Steps (i)-(v) with the scene's scheme; see :func:`steps`."""
-        scene = self.scene
+        scene, run = self.scene, self.run
         grid, law = scene.grid, scene.law
-        comps = self.comps
         dt = scene.dt
         scheme = self.scheme
-        self.eta = self.response.eta
-        # the product schemes' trial slips, where the law (or contact) reads the slip
-        self.trial_slips = (scheme.name == "product" or scheme.mean_velocity) and reads_slip(law, comps)
-        self.work = {c: np.empty(grid.shape) for c in comps} if self.trial_slips else None
-        self.vmean = {c: np.empty(grid.shape) for c in comps} if scheme.mean_velocity else None
         for n in range(self.n, scene.nsteps + 1):
             t = n * dt
-            f, trial, law_step = scheme.estimate(self, n, t)
+            f, trial, law_step = scheme.estimate(run, n, t)
             # law_step: (crack length, strength, load terms) when the scheme did the law's update
-            length, strength, terms = law_step or self.update_law(n, t, trial, self.v, self.tau)
+            length, strength, terms = law_step or self.update_law(n, t, trial, run.v, run.tau)
             # tau* = tau0 + f (f: the response's work arrays)
-            v_new, tau = law.solve(self.lstate, f, trial, self.eta, dt, strength, terms)
-            scheme.finish(self, n, v_new)
+            v_new, tau = law.solve(run.lstate, f, trial, run.eta, dt, strength, terms)
+            scheme.finish(run, n, v_new)
             self.response.settle(v_new)
-            self.v, self.tau, self.n = v_new, tau, n + 1
-            self._check(n, t, v_new, self.load.factor(t, length))
-            applied = law.applied_strength(strength, tau, self.lstate)
-            yield State(n, t, self.delta, v_new, tau, np.broadcast_to(applied, grid.shape),
-                        self.lstate, self._faces(v_new))
+            run.v, run.tau, self.n = v_new, tau, n + 1
+            self._check(n, t, v_new, run.load.factor(t, length))
+            applied = law.applied_strength(strength, tau, run.lstate)
+            yield State(n, t, run.delta, v_new, tau, np.broadcast_to(applied, grid.shape),
+                        run.lstate, self._faces(v_new))
 
     def _faces(self, v_new):
         """``State.faces`` of this step: the interface's faces, their jump this step's delta or v."""
@@ -198,7 +214,7 @@ class Stepper:
             if (n + 1) // size >= SLOW_COUNT and self.vscale > 0 and m > SLOW_BOUND * self.vscale \
                     and blocks[0] > 0 and np.all(np.diff(blocks) > 0) and blocks[-1] >= SLOW_FACTOR * blocks[0]:
                 rate = float(np.polyfit(size * np.arange(SLOW_COUNT), np.log(blocks), 1)[0])
-                gamma_m = grid.q_max() * self.scene.material.cs * self.scene.dt
+                gamma_m = mode_gamma(grid.q_max(), self.scene.material.cs, self.scene.dt)
                 self._growth(n, t, v, c, m, f"grew {blocks[-1] / blocks[0]:.3g}-fold over the last "
                                             f"{size * SLOW_COUNT} steps, steadily: {100 * math.expm1(rate):.3g} % "
                                             f"per step (e-fold in {1 / rate:.3g} steps; {rate / gamma_m:.3g} per "

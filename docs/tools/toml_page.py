@@ -9,8 +9,8 @@ What the page lists comes from the code: the sections and their keys from the da
 meaning of a key outside [law] from ``cracklab.model.keys``, and the laws from
 ``cracklab.laws.LAWS``: each law's parameters with the unit, kind, range and meaning they
 declare (``laws.base.parameter``), its components, state variables and the first paragraph
-of its docstring. The one thing written here is a small example scene per law
-(``EXAMPLES``); a law without one stops the script. tests/docs/test_toml_page.py fails
+of its docstring, and the small example scene each law gives (``Law.example``, in the
+law's file); a law without one stops the script. tests/docs/test_toml_page.py fails
 when the committed page differs from what this script writes, runs every example through
 ``Scene.from_toml``, and checks that the values the definitions call refused are refused.
 """
@@ -30,257 +30,6 @@ try:
     import cracklab  # noqa: F401
 except ImportError:  # run from a checkout without an install
     sys.path.insert(0, str(ROOT))
-
-#: one small, valid scene per law kind (the page shows them; the test parses each)
-EXAMPLES = {
-    "constant_friction": '''\
-# Coulomb friction that follows the normal traction (no sigma_n), in the plane
-# problem: pressed by tau0_2 = -1, the plane slides where tau0_1 > mu_f = 0.6
-name = "constant_friction_example"
-t_end = 0.5
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 1
-L1 = 1.0
-L3 = 1.0
-
-[law]
-kind = "constant_friction"
-mu_f = 0.6
-
-[loading]
-tau0_1 = [[0.5], [0.5], [0.5], [0.5], [0.5], [0.5], [0.7], [0.7],
-          [0.7], [0.7], [0.5], [0.5], [0.5], [0.5], [0.5], [0.5]]
-tau0_2 = -1.0
-
-[record]
-fields = ["delta_1", "tau_2"]
-every = 4
-''',
-    "coupled_cohesive": '''\
-# Modes I and II softening together in the plane problem: a crack of nodes 0-2
-# and 13-15 (across the periodic boundary) under a mixed, ramped load
-name = "coupled_cohesive_example"
-t_end = 0.5
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 1
-L1 = 1.0
-L3 = 1.0
-
-[law]
-kind = "coupled_cohesive"
-tau_c = 1.0
-tau_s = 1.0
-delta_c = 0.02
-beta = 1.0
-mu_f = 0.3
-initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
-                 [false], [false], [false], [false], [false], [true], [true], [true]]
-
-[loading]
-tau0_1 = 0.3
-tau0_2 = 0.3
-time = "ramp"
-ramp_time = 0.1
-
-[record]
-fields = ["delta_1", "delta_2", "lambda_max"]
-''',
-    "linear_cohesive": '''\
-# A mode I crack in the plane problem: nodes 0-2 and 13-15 (the crack across the
-# periodic boundary) broken at t = 0, the plane under a suddenly applied tension
-name = "linear_cohesive_example"
-t_end = 0.5
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 1
-L1 = 1.0
-L3 = 1.0
-
-[law]
-kind = "linear_cohesive"
-tau_c = 1.0
-delta_c = 0.01
-initial_crack = [[true], [true], [true], [false], [false], [false], [false], [false],
-                 [false], [false], [false], [false], [false], [true], [true], [true]]
-
-[loading]
-tau0_2 = 0.4
-
-[record]
-fields = ["delta_2", "delta_max"]
-every = 4
-''',
-    "prescribed_rupture": '''\
-# Kostrov's crack: the strength drops from infinity to 0 as a circle growing at
-# 0.7 cs from the centre passes, over 0.05 time units
-name = "prescribed_rupture_example"
-t_end = 0.5
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 32
-n3 = 32
-L1 = 1.0
-L3 = 1.0
-
-[law]
-kind = "prescribed_rupture"
-speed = 0.7
-origin = [0.5, 0.5]
-residual = 0.0
-strength_before = inf
-weakening_time = 0.05
-
-[loading]
-tau0_1 = 1.0
-
-[record]
-fields = ["delta_1"]
-
-[record.stations]
-centre = [0.5, 0.5]
-''',
-    "rate_state": '''\
-# TPV101 on a coarse grid (600 m): ageing law, sliding at 1e-12 m/s under 75 MPa,
-# nucleated by a 25 MPa patch of radius 3 km that grows over 1 s
-name = "rate_state_example"
-t_end = 2.0
-
-[units]
-length = "m"
-time = "s"
-stress = "Pa"
-
-[material]
-mu = 3.2038e10
-cs = 3464.0
-nu = 0.25
-
-[grid]
-n1 = 64
-n3 = 32
-L1 = 38400.0
-L3 = 19200.0
-
-[law]
-kind = "rate_state"
-a = 0.008
-b = 0.012
-L = 0.02
-V0 = 1e-6
-f0 = 0.6
-sigma_n = 120e6
-V_ini = 1e-12
-evolution = "ageing"
-
-[loading]
-tau0_1 = 75e6
-nucleation_dtau_1 = 25e6
-nucleation_radius = 3000.0
-nucleation_time = 1.0
-nucleation_x1 = 19200.0
-nucleation_x3 = 9600.0
-
-[record]
-fields = ["v_1", "psi"]
-every = 10
-
-[record.stations]
-hypocentre = [19200.0, 9600.0]
-''',
-    "slip_weakening": '''\
-# A TPV3-like fault on a coarse grid (about 470 m): slip weakening under 120 MPa,
-# nucleated from t = 0 by a shear stress raised up to 30 MPa within 3 km
-name = "slip_weakening_example"
-t_end = 1.0
-
-[units]
-length = "m"
-time = "s"
-stress = "Pa"
-
-[material]
-mu = 3.2038e10
-cs = 3464.0
-nu = 0.25
-
-[grid]
-n1 = 64
-n3 = 32
-L1 = 30000.0
-L3 = 15000.0
-
-[law]
-kind = "slip_weakening"
-mu_s = 0.677
-mu_d = 0.525
-D_c = 0.4
-sigma_n = 120e6
-
-[loading]
-tau0_1 = 70e6
-nucleation_dtau_1 = 30e6
-nucleation_radius = 3000.0
-nucleation_time = 0.0
-nucleation_x1 = 15000.0
-nucleation_x3 = 7500.0
-
-[record]
-fields = ["v_1", "slip"]
-every = 5
-''',
-    "traction_free": '''\
-# A traction-free plane under a uniform step of tension: it opens everywhere,
-# at the rate 2 cs tau0_2 / (mu a) (the radiation damping of mode I)
-name = "traction_free_example"
-t_end = 0.2
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 16
-L1 = 1.0
-L3 = 1.0
-
-[law]
-kind = "traction_free"
-contact = false
-
-[loading]
-tau0_2 = 1.0
-
-[record]
-fields = ["delta_2", "v_2"]
-''',
-}
 
 VALUE = {
     "number": "number", "integer": "integer", "boolean": "boolean", "string": "string",
@@ -448,8 +197,8 @@ def law_section(kind: str, cls) -> list[str]:
     from cracklab.laws.base import parameter_docs
     from cracklab.model.scene_io import section_schema
 
-    if kind not in EXAMPLES:
-        raise SystemExit(f"the law {kind!r} has no example: add one to EXAMPLES in docs/tools/toml_page.py")
+    if not cls.example:
+        raise SystemExit(f"the law {kind!r} has no example: give {cls.__name__} an `example`, a small TOML scene")
     schema = section_schema("law", cls)
     docs = parameter_docs(cls)
     lines = [f"### `kind = \"{kind}\"`", "", f"`{cls.__name__}`, acting on {components(cls)}. "
@@ -469,7 +218,7 @@ def law_section(kind: str, cls) -> list[str]:
     state = cls.state_variables
     lines += ["", "State variables (`record.fields`): " + (", ".join(
         f"`{n}` ({long}, {unit})" for n, (long, unit) in state.items()) or "none") + ".", ""]
-    lines += ["```toml", EXAMPLES[kind].rstrip("\n"), "```", ""]
+    lines += ["```toml", cls.example.rstrip("\n"), "```", ""]
     return lines
 
 
@@ -492,9 +241,6 @@ def render() -> str:
     from cracklab.model.scene import Scene
     from cracklab.model.scene_io import section_classes
 
-    extra = sorted(set(EXAMPLES) - set(LAWS))
-    if extra:
-        raise SystemExit(f"EXAMPLES of laws that do not exist: {extra}")
     lines = [HEADER.rstrip("\n")]
     lines += [row(f"`{k}`", key.accepted, key.doc) for k, key in FILE_KEYS.items()]
     saved, inline = saved_lines()

@@ -191,10 +191,10 @@ def test_two_materials_round_trip_through_toml_and_the_output():
 
 
 def test_the_pair_is_held_to_a_margin_below_the_smaller_sides_limit():
-    """Scene.beta_max of two materials is BIMATERIAL_MARGIN of the smaller of the sides'
-    limits (the coupled faces grew at 0.97-1.0 of it); a beta above it is refused before
-    any work, naming the margin; one material keeps its own limit."""
-    from cracklab.model.scene import BIMATERIAL_MARGIN
+    """Scene.beta_max of two materials is the bimaterial interface's margin of the smaller of
+    the sides' limits (the coupled faces grew at 0.97-1.0 of it); a beta above it is refused
+    before any work, naming the margin; one material keeps its own limit."""
+    BIMATERIAL_MARGIN = Bimaterial.margin
 
     g = Grid(n1=16, n3=16, L1=1.0, L3=1.0)
     soft = Material(mu=0.6, cs=0.8, nu=0.3)

@@ -19,7 +19,7 @@ import cracklab
 from cracklab import Grid, Loading, Material, Numerics, Record, Scene
 from cracklab.errors import InputError, SimulationError
 from cracklab.laws import TractionFree
-from cracklab.analysis.modal import envelope_growth, modal_response
+from cracklab.analysis.modal import envelope_growth, scheme_response
 from cracklab.solver.stability import GROWTH_TOLERANCE, SAFETY, SCHEMES, beta_max, gamma_max
 
 NUS = (0.1, 0.25, 0.3, 0.35, 0.45)
@@ -31,9 +31,7 @@ LOAD = {"displacement": (2,), "velocity": (2,), "product": (1, 3), "product2": (
 
 def modal_growth(scheme, mode, gamma, nu, T_end=2000.0):
     """Growth per unit T of the envelope over [T_end/2, T_end] (studies/stability_nu.py's measure)."""
-    formulation, convolution, integration = SCHEMES[scheme]
-    return envelope_growth(modal_response(mode, gamma=gamma, T_end=T_end, nu=nu, formulation=formulation,
-                                          convolution=convolution, integration=integration))
+    return envelope_growth(scheme_response(scheme, mode, gamma=gamma, T_end=T_end, nu=nu))
 
 
 @pytest.mark.parametrize("nu", NUS)

@@ -30,9 +30,9 @@ import numpy as np
 
 from ..face import CHANNELS, Face
 from ..loops import _compiled, rotate
-from ..schemes import SCHEMES
+from ..schemes import SCHEMES, scheme_of
 from ..spectral import Transforms
-from .base import Interface
+from .base import Interface, register
 
 
 class _Rows:
@@ -55,13 +55,58 @@ class _Rows:
         return pool[off:off + n * Mp].reshape(tuple(lead) + (Mp,))
 
 
+def _parts(plane, components) -> tuple:
+    """(inplane, transverse): whether the faces carry the L, N channels and their coupling,
+    and the T channel (in the plane: for an in-plane, for the anti-plane component)."""
+    comps = set(components)
+    if plane:
+        return bool(comps & {1, 2}), 3 in comps
+    return True, bool(comps & {1, 3})
+
+
+@register
 class Bimaterial(Interface):
     """The interface between ``top`` (x2 > 0) and ``bottom`` (options: HalfSpace's)."""
 
+    #: of two different materials, the stable limit is this fraction of the smaller side's
+    #: (measured on the traction-free mixed-mode faces: stable at 0.9, growing from 0.97;
+    #: docs/performance.md, "Bimaterial interface")
+    margin = 0.9
+    energy_refusal = ("energy_budget covers an interface between two half spaces of one material; "
+                      "this scene has two (the bimaterial budget is not implemented)")
+    holds_faces = True
+
+    @classmethod
+    def accepts(cls, top, bottom) -> bool:
+        return top != bottom
+
+    @classmethod
+    def accepts_scheme(cls, scheme) -> bool:
+        """The product schemes (product2: the same response, another law update)."""
+        return scheme_of(scheme).rule == "product"
+
+    @classmethod
+    def scheme_error(cls, formulation) -> str:
+        names = " or ".join(repr(name) for name, s in SCHEMES.items() if cls.accepts_scheme(s))
+        return f"a pair of different materials runs the product scheme ({names}); got {formulation!r}"
+
+    @classmethod
+    def margin_note(cls) -> str:
+        return f"; of two materials {cls.margin:g} of the smaller side's limit"
+
+    @classmethod
+    def engine_channels(cls, scene) -> tuple:
+        """Each face's channels, of its own material: L, N, LN, NL (kernels H11, H22, H12,
+        H12) with an in-plane component, T (C_III) with a transverse one."""
+        inplane, transverse = _parts(scene.grid.plane, scene.components)
+        names = (("L", "N", "LN", "NL") if inplane else ()) + (("T",) if transverse else ())
+        return tuple((CHANNELS[name][0], material) for material in scene.materials for name in names)
+
     def __init__(self, top, bottom, grid, dt, components, *, formulation="product", engine="direct", window=None,
                  transforms=None, nsteps=None, threads=None, rule=None):
-        if SCHEMES[formulation].rule != "product":   # product2: the same response, another law update
-            raise NotImplementedError(f"the bimaterial interface runs the product scheme, not {formulation!r}")
+        scheme = scheme_of(formulation)
+        if not self.accepts_scheme(scheme):
+            raise NotImplementedError(f"the bimaterial interface runs the product scheme, not {scheme.name!r}")
         self.materials = (top, bottom)
         self.components = tuple(sorted(components))
         self.fft = transforms or Transforms(grid)
@@ -70,13 +115,9 @@ class Bimaterial(Interface):
         with np.errstate(invalid="ignore", divide="ignore"):
             self.c = np.where(q > 0, k / q, 0.0)
             self.s = np.where(q > 0, m / q, 0.0)
-        comps = set(self.components)
-        if grid.plane:
-            inplane, transverse = bool(comps & {1, 2}), 3 in comps
-        else:
-            inplane, transverse = True, bool(comps & {1, 3})
+        inplane, transverse = _parts(grid.plane, self.components)
         self.parts = (("L", "N") if inplane else ()) + (("T",) if transverse else ())
-        opts = dict(engine=engine, window=window, nsteps=nsteps, threads=threads or self.fft.workers)
+        opts = dict(engine=engine, window=window, nsteps=nsteps, threads=threads or self.fft.workers, scheme=scheme)
         self.faces = (Face(top, grid, dt, q, sign=1, inplane=inplane, transverse=transverse, **opts),
                       Face(bottom, grid, dt, q, sign=-1, inplane=inplane, transverse=transverse, **opts))
         self.channels = {f"{side}.{name}": ch for side, face in zip(("top", "bottom"), self.faces)

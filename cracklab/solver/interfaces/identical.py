@@ -5,12 +5,29 @@ Eqs. 32-33) and eta = V_jj of Eq. (4), mu/(2 c_s) in shear and mu c_d/(2 c_s^2) 
 """
 from __future__ import annotations
 
-from ..halfspace import HalfSpace
-from .base import Interface
+from ..halfspace import HalfSpace, active_channels
+from .base import Interface, register
 
 
+@register
 class Identical(Interface):
     """The interface between two half spaces of ``material`` (options: HalfSpace's)."""
+
+    margin = 1.0                # the one material's own limit
+    energy_refusal = None       # analysis/energy.py's budget is this pair's
+
+    @classmethod
+    def accepts(cls, top, bottom) -> bool:
+        return top == bottom
+
+    @classmethod
+    def build(cls, top, bottom, grid, dt, components, **options) -> "Identical":
+        return cls(top, grid, dt, components, **options)
+
+    @classmethod
+    def engine_channels(cls, scene) -> tuple:
+        """One engine per channel the active components drive, of the one material."""
+        return tuple((kernel, scene.material) for kernel in active_channels(scene.grid.plane, scene.components))
 
     def __init__(self, material, grid, dt, components, **options):
         self.material = material

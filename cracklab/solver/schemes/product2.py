@@ -15,11 +15,14 @@ from __future__ import annotations
 import numpy as np
 
 from ..loops import plus_mean, plus_scaled
+from .base import register
 from .product import Product
 
 
+@register
 class Product2(Product):
     name = "product2"
+    order = 3
     mean_velocity = True
 
     def estimate(self, run, n, t):
@@ -27,8 +30,8 @@ class Product2(Product):
         with v_{n-1}), then the corrector's f_n and the law's update with the step's mean
         velocity (v_{n-1} + v*_n)/2 (and, where the law reads the slip, the trial slip
         delta_{n-1} + dt (v_{n-1} + v*_n)/2)."""
-        response, law, delta, v, tau = run.response, run.scene.law, run.delta, run.v, run.tau
-        dt, comps, eta, grid = run.scene.dt, run.comps, run.eta, run.scene.grid
+        response, law, delta, v, tau = run.response, run.law, run.delta, run.v, run.tau
+        dt, comps, eta, grid = run.dt, run.comps, run.eta, run.grid
         f = response.predict(v)
         if n == 0:
             return f, delta, None

@@ -1,0 +1,32 @@
+"""The history-engine protocol (docs/developer.md, "Layers"): an engine is a class
+registered with :func:`register` under its ``name`` (a value of ``Numerics.engine``); every
+module of this package is imported (``history.ENGINES``), so that a new engine is one file.
+
+The class says, before any is built:
+
+* ``windowed``: whether it keeps a truncated history (``Numerics.window``);
+* ``flat_cost``: whether its cost per step stays flat as the run goes ("auto" picks the
+  first such engine that takes the scene's window);
+* ``memory(scene, kernel, scheme, material)``: (bytes held, extra bytes while it is built
+  or grows) of one engine of a half space of ``material`` serving the channel of
+  ``kernel`` under ``scheme`` (solver/budget.py sums them).
+
+An instance, built with ``(kernel=, gamma=, nu=, rule=, formulation=, lag=, window=,
+chunk=, threads=, nsteps=)``, answers ``push(x, out=None, scale=None)`` with S_n,
+``weight(j)``, ``start_weight(n)`` (the product rule's E_0(n)), ``launch()`` and ``wait()``
+(work on a thread of its own, if any), ``get_state()`` and ``set_state(state)``.
+"""
+from __future__ import annotations
+
+#: {name: engine class}, in the order the classes registered (history.ENGINES sorts them)
+REGISTRY: dict = {}
+
+
+def register(cls):
+    """Class decorator: register the engine class ``cls`` under its ``name``."""
+    if not cls.name:
+        raise ValueError(f"{cls.__name__} has no name")
+    if REGISTRY.get(cls.name, cls) is not cls:
+        raise ValueError(f"two history engines are named {cls.name!r}: {REGISTRY[cls.name].__name__}, {cls.__name__}")
+    REGISTRY[cls.name] = cls
+    return cls
