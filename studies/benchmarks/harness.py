@@ -51,6 +51,13 @@ def reference_dir(name: str, directory=None) -> Path:
                             f"{REFERENCE_ENV} to the folder that holds {name}/")
 
 
+def mdsbi_station(name: str, station: str, directory=None) -> dict:
+    """One station file of the MDSBI reference ``name`` (``measures.read_mdsbi``)."""
+    from studies.benchmarks.measures import read_mdsbi
+
+    return read_mdsbi(reference_dir(name, directory) / f"{station}.txt")
+
+
 # ------------------------------------------------------------------------------ runs
 def store_path(out, tag) -> Path:
     """OUT/<tag>.zarr (its metadata: the .json next to it)."""
@@ -156,6 +163,30 @@ def load_run(store):
     return ds, scene_of(ds), stations(ds).load()
 
 
+def analyse_runs(stores: dict, compare, extra=None) -> dict:
+    """The runs ``stores`` ({dx key: store}) against the reference: {"runs": {dx key: the
+    metadata with "ruptured_fraction" (of the fault's nodes) and "last_rupture_time"},
+    "stations": {station: {dx key: comparison}}}, the comparisons being ``compare(st)``
+    ({station: comparison} of a station Dataset); ``extra(st, rt, fault)``: more entries of
+    the metadata (rt the rupture-time field, fault the mask of the nodes that may slip)."""
+    import numpy as np
+
+    res = {"runs": {}, "stations": {}}
+    for key, store in stores.items():
+        meta = read_meta(store)
+        ds, scene, st = load_run(store)
+        res["runs"][key] = meta
+        for s, cmp in compare(st).items():
+            res["stations"].setdefault(s, {})[key] = cmp
+        rt = ds.rupture_time.values
+        fault = ~np.asarray(scene.law.bonded)
+        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
+        meta["last_rupture_time"] = float(np.nanmax(rt)) if np.isfinite(rt).any() else float("nan")
+        if extra is not None:
+            meta.update(extra(st, rt, fault))
+    return res
+
+
 # ------------------------------------------------------------------------------ command line
 def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help: str, t_end=12.0,
            t_end_help="simulated time of the runs (s)", first=()) -> argparse.ArgumentParser:
@@ -219,17 +250,19 @@ def per_dx(acc) -> dict:
     return dict(sorted(out.items(), reverse=True))
 
 
-def station_rows(res, stations, dxs) -> str:
-    """The acceptance table's rows (studies.benchmarks.measures.check_acceptance): each
-    station's rupture time, final slip and peak slip rate against the reference's, each
-    difference with its limit and whether it holds."""
-    from studies.benchmarks.measures import fmt_tol
+def station_rows(res, stations, dxs, mark=None, extra=None) -> str:
+    """The acceptance table's rows: each station's rupture time, final slip and peak slip
+    rate against the reference's, each difference followed by ``mark(station, dx key,
+    quantity)`` (default: " (<limit>: <holds>)" of ``measures.check_acceptance``'s rows);
+    ``extra(comparison, station, dx key)``: a last column."""
+    if mark is None:
+        from studies.benchmarks.measures import fmt_tol
 
-    checks = {(r["station"], f"{r['dx']:g}", r["quantity"]): r for r in res["acceptance"]["checks"]}
+        checks = {(r["station"], f"{r['dx']:g}", r["quantity"]): r for r in res["acceptance"]["checks"]}
 
-    def limit(s, key, q):
-        r = checks.get((s, key, q))
-        return "not checked" if r is None else f"{fmt_tol(q, r['limit'])}: {ok(r['pass'])}"
+        def mark(s, key, q):
+            r = checks.get((s, key, q))
+            return " (not checked)" if r is None else f" ({fmt_tol(q, r['limit'])}: {ok(r['pass'])})"
 
     rows = []
     for s in stations:
@@ -238,11 +271,31 @@ def station_rows(res, stations, dxs) -> str:
             c = res["stations"][s][key]
             rows.append(
                 f"| {s} | {key} m | {c['sim']['rupture_time']:.3f} | {c['ref']['rupture_time']:.3f} | "
-                f"{c['diff']['rupture_time']:+.3f} ({limit(s, key, 'rupture_time')}) | "
+                f"{c['diff']['rupture_time']:+.3f}{mark(s, key, 'rupture_time')} | "
                 f"{c['sim']['final_slip']:.3f} | {c['ref']['final_slip']:.3f} | "
-                f"{100 * c['rel']['final_slip']:+.1f} % ({limit(s, key, 'final_slip')}) | "
+                f"{100 * c['rel']['final_slip']:+.1f} %{mark(s, key, 'final_slip')} | "
                 f"{c['sim']['peak_rate']:.3f} | {c['ref']['peak_rate']:.3f} | "
-                f"{100 * c['rel']['peak_rate']:+.1f} % ({limit(s, key, 'peak_rate')}) |")
+                f"{100 * c['rel']['peak_rate']:+.1f} %{mark(s, key, 'peak_rate')} |"
+                + ("" if extra is None else f" {extra(c, s, key)} |"))
+    return "\n".join(rows)
+
+
+def measure_rows(res, stations, dxs, own_peak=False) -> str:
+    """The rows of the measures outside the acceptance: the interpolated rupture time on
+    cracklab's own steps and the reference's, the time of the peak slip rate (difference),
+    with ``own_peak`` the peak on cracklab's own steps, the final shear stress, and the RMS
+    differences of the series (slip / slip rate / stress, % of the reference's peak)."""
+    rows = []
+    for s in stations:
+        for dx in dxs:
+            c = res["stations"][s][f"{dx:g}"]
+            f, r, m = c["fine"], c["series_rms"], c["sim"]
+            rows.append(
+                f"| {s} | {dx:g} m | {f['rupture_time_interp']:.4f} | {c['ref']['rupture_time_interp']:.4f} | "
+                f"{m['peak_time']:.2f} ({c['diff']['peak_time']:+.2f}) | {c['ref']['peak_time']:.2f} | "
+                + (f"{f['peak_rate']:.3f} at {f['peak_time']:.3f} s | " if own_peak else "")
+                + f"{m['final_stress']:.2f} ({c['diff']['final_stress']:+.2f}) | {c['ref']['final_stress']:.2f} | "
+                f"{100 * r['slip']:.1f} / {100 * r['rate']:.1f} / {100 * r['stress']:.1f} |")
     return "\n".join(rows)
 
 

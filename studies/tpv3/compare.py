@@ -8,7 +8,7 @@ v-slip, v-rate, v-stress in s, m, m/s, MPa.
 """
 from __future__ import annotations
 
-from studies.benchmarks.harness import reference_dir
+from studies.benchmarks.harness import mdsbi_station, reference_dir
 from studies.benchmarks.measures import (  # noqa: F401 - the study's measures, under one name
     ACCEPT_DX, COLUMNS, QUANTITY, THRESHOLD, TIE, TOL_FINAL_SLIP, TOL_PEAK_RATE, TOL_RUPTURE_TIME, TOLERANCES,
     acceptance, check_acceptance, compare_station, differences, final_value, fmt_tol, metrics, peak, resample,
@@ -25,4 +25,4 @@ def default_reference_dir():
 def load_reference(station: str, directory=None) -> dict:
     """The MDSBI series of one station: dict of numpy arrays keyed by ``COLUMNS``
     (stress in MPa as in the file)."""
-    return read_mdsbi(reference_dir(REFERENCE, directory) / f"{station}.txt")
+    return mdsbi_station(REFERENCE, station, directory)

@@ -128,19 +128,8 @@ def compare_run(st, refs):
 
 
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = H.read_meta(store_path(out, dx))
-        ds, scene, st = load_run(out, dx)
-        res["runs"][key] = meta
-        for s, cmp in compare_run(st, refs).items():
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt))
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs))
     res["acceptance"] = C.check_acceptance(res["stations"])
     return res
 
@@ -239,21 +228,6 @@ def fig_rupture(out, dxs, figdir):
 
 
 # ------------------------------------------------------------------------------ page
-def _fmt_extra_rows(res, dxs):
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            f, r, m = c["fine"], c["series_rms"], c["sim"]
-            rows.append(
-                f"| {s} | {dx:g} m | {f['rupture_time_interp']:.4f} | {c['ref']['rupture_time_interp']:.4f} | "
-                f"{m['peak_time']:.2f} ({c['diff']['peak_time']:+.2f}) | {c['ref']['peak_time']:.2f} | "
-                f"{f['peak_rate']:.3f} at {f['peak_time']:.3f} s | "
-                f"{m['final_stress']:.2f} ({c['diff']['final_stress']:+.2f}) | {c['ref']['final_stress']:.2f} | "
-                f"{100 * r['slip']:.1f} / {100 * r['rate']:.1f} / {100 * r['stress']:.1f} |")
-    return "\n".join(rows)
-
-
 def _fmt_runs(res, dxs):
     rows = []
     for dx in dxs:
@@ -377,7 +351,7 @@ reference's peak of each):
 
 | station | dx | rupture time, interpolated (s) | MDSBI | time of peak (s) | MDSBI | peak on own steps (m/s) | final stress (MPa) | MDSBI | RMS difference (%) |
 |---|---|---|---|---|---|---|---|---|---|
-{_fmt_extra_rows(res, dxs)}
+{H.measure_rows(res, REF_STATIONS, dxs, own_peak=True)}
 
 Station positions and symmetry: each station's offset from the hypocentre (the node it
 is recorded on), the largest dip component of the slip rate there (zero by symmetry on

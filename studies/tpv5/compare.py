@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from studies.benchmarks.harness import reference_dir
+from studies.benchmarks.harness import mdsbi_station, reference_dir
 from studies.benchmarks.measures import (  # noqa: F401 - TPV3's measures, under this study's name
     ACCEPT_DX, COLUMNS, QUANTITY, THRESHOLD, TOL_FINAL_SLIP, TOL_PEAK_RATE, TOL_RUPTURE_TIME, TOLERANCES,
     acceptance, check_acceptance, compare_station, differences, final_value, fmt_tol, metrics, peak, read_mdsbi,
@@ -38,7 +38,7 @@ def default_reference_dir():
 
 def load_reference(station: str, directory=None) -> dict:
     """The MDSBI series of one TPV5 station: dict of numpy arrays keyed by ``COLUMNS``."""
-    return read_mdsbi(reference_dir(REFERENCE, directory) / f"{station}.txt")
+    return mdsbi_station(REFERENCE, station, directory)
 
 
 def lag_fit(betas, lags, *, limit=TOL_RUPTURE_TIME, beta_now=None, order=1) -> dict:

@@ -167,20 +167,9 @@ def compare_run(st, refs):
 
 
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = H.read_meta(store_path(out, dx))
-        ds, scene, st = load_run(out, dx)
-        res["runs"][key] = meta
-        for s, cmp in compare_run(st, refs).items():
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt))
-        meta["surface_rupture_time"] = float(np.nanmax(rt[:, 0][fault[:, 0]]))
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs),
+                         lambda st, rt, fault: {"surface_rupture_time": float(np.nanmax(rt[:, 0][fault[:, 0]]))})
     res["acceptance"] = C.check_acceptance(res["stations"])
     return res
 
@@ -332,20 +321,6 @@ def fig_rupture(out, dxs, figdir):
 # ------------------------------------------------------------------------------ page
 def verdict_lines(res, dxs):
     return H.verdict_lines(res, dxs, "the five stations")
-
-
-def _fmt_extra_rows(res, dxs):
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            f, r, m = c["fine"], c["series_rms"], c["sim"]
-            rows.append(
-                f"| {s} | {dx:g} m | {f['rupture_time_interp']:.4f} | {c['ref']['rupture_time_interp']:.4f} | "
-                f"{m['peak_time']:.2f} ({c['diff']['peak_time']:+.2f}) | {c['ref']['peak_time']:.2f} | "
-                f"{m['final_stress']:.2f} ({c['diff']['final_stress']:+.2f}) | {c['ref']['final_stress']:.2f} | "
-                f"{100 * r['slip']:.1f} / {100 * r['rate']:.1f} / {100 * r['stress']:.1f} |")
-    return "\n".join(rows)
 
 
 def _fmt_runs(res, dxs):
@@ -534,7 +509,7 @@ slip rate / stress change, in % of the reference's peak of each):
 
 | station | dx | rupture time, interpolated (s) | MDSBI | time of peak (s) | MDSBI | final stress (MPa) | MDSBI | RMS difference (%) |
 |---|---|---|---|---|---|---|---|---|
-{_fmt_extra_rows(res, dxs)}
+{H.measure_rows(res, REF_STATIONS, dxs)}
 
 Station positions: the node each station is recorded on (strike from the hypocentre,
 depth), and the largest dip component of the slip rate there, cracklab's and MDSBI's. On

@@ -89,26 +89,24 @@ def station_extras(sim) -> dict:
             "final_dip": [float(sim["far_dip"][-1]), float(sim["near_dip"][-1])]}
 
 
+def compare_run(st, refs):
+    """Every reference station of one run: compare.compare_station, the run's own checks
+    (station_extras) and the reference's final dip and normal displacements."""
+    out = {}
+    for s in REF_STATIONS:
+        sim = sim_series(st, s)
+        cmp = C.compare_station(sim, refs[s])
+        cmp["own"] = station_extras(sim)
+        cmp["ref_final_dip"] = [float(refs[s]["far"]["v_disp"][-1]), float(refs[s]["near"]["v_disp"][-1])]
+        cmp["ref_final_normal_disp"] = float(refs[s]["far"]["n_disp"][-1])
+        out[s] = cmp
+    return out
+
+
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = H.read_meta(store_path(out, dx))
-        ds, scene, st = load_run(out, dx)
-        meta["t_reached"] = float(st.t.values[-1])
-        res["runs"][key] = meta
-        for s in REF_STATIONS:
-            sim = sim_series(st, s)
-            cmp = C.compare_station(sim, refs[s])
-            cmp["own"] = station_extras(sim)
-            cmp["ref_final_dip"] = [float(refs[s]["far"]["v_disp"][-1]), float(refs[s]["near"]["v_disp"][-1])]
-            cmp["ref_final_normal_disp"] = float(refs[s]["far"]["n_disp"][-1])
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt)) if np.isfinite(rt).any() else float("nan")
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs),
+                         lambda st, rt, fault: {"t_reached": float(st.t.values[-1])})
     finest = min(dxs)
     res["acceptance"] = C.check_acceptance(res["stations"], dx=C.ACCEPT_DX) if C.ACCEPT_DX in dxs else None
     res["indicative"] = None if C.ACCEPT_DX in dxs else C.check_acceptance(
@@ -239,20 +237,8 @@ def _station_rows(res, dxs):
         r = checks.get((s, key, q))
         return "" if r is None else f" ({H.ok(r['pass'])})"
 
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            key = f"{dx:g}"
-            c = res["stations"][s][key]
-            rows.append(
-                f"| {s} | {key} m | {c['sim']['rupture_time']:.3f} | {c['ref']['rupture_time']:.3f} | "
-                f"{c['diff']['rupture_time']:+.3f}{mark(s, key, 'rupture_time')} | "
-                f"{c['sim']['final_slip']:.3f} | {c['ref']['final_slip']:.3f} | "
-                f"{100 * c['rel']['final_slip']:+.1f} %{mark(s, key, 'final_slip')} | "
-                f"{c['sim']['peak_rate']:.3f} | {c['ref']['peak_rate']:.3f} | "
-                f"{100 * c['rel']['peak_rate']:+.1f} %{mark(s, key, 'peak_rate')} | "
-                f"{c['normal_rms']:.2f}{mark(s, key, 'normal_rms')} |")
-    return "\n".join(rows)
+    return H.station_rows(res, REF_STATIONS, dxs, mark,
+                          lambda c, s, key: f"{c['normal_rms']:.2f}{mark(s, key, 'normal_rms')}")
 
 
 def _face_rows(res, dxs):
