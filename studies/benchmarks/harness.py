@@ -163,6 +163,36 @@ def load_run(store):
     return ds, scene_of(ds), stations(ds).load()
 
 
+def strike_series(st, station) -> dict:
+    """cracklab's strike components at one station of a station Dataset: t, slip, rate,
+    stress (MPa, as the references) and the dip slip rate rate3."""
+    s = st.sel(station=station)
+    return {"t": st.t.values, "slip": s.delta_1.values, "rate": s.v_1.values,
+            "stress": s.tau_1.values / 1e6, "rate3": s.v_3.values}
+
+
+def reference_series(ref) -> dict:
+    """An MDSBI record's strike (h) components under the names of ``strike_series``."""
+    return {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"], "stress": ref["h_stress"]}
+
+
+def compare_strike(st, station, ref):
+    """One station's strike components against an MDSBI record (``measures.compare_station``)
+    with the acceptance of each quantity ("accept"), the whole-series RMS differences
+    ("series_rms") and the largest dip slip rate ("max_abs_v3"). Returns (comparison,
+    cracklab's series, the reference's series)."""
+    import numpy as np
+
+    from studies.benchmarks import measures as M
+
+    sim, r = strike_series(st, station), reference_series(ref)
+    cmp = M.compare_station(sim, r)
+    cmp["accept"] = M.acceptance(cmp)
+    cmp["series_rms"] = M.series_errors(sim, r)
+    cmp["max_abs_v3"] = float(np.max(np.abs(sim["rate3"])))
+    return cmp, sim, r
+
+
 def analyse_runs(stores: dict, compare, extra=None) -> dict:
     """The runs ``stores`` ({dx key: store}) against the reference: {"runs": {dx key: the
     metadata with "ruptured_fraction" (of the fault's nodes) and "last_rupture_time"},
@@ -208,6 +238,19 @@ def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help
                    help=f"{reference_help} (default ${REFERENCE_ENV}/<name>, else ../shared/reference/<name> "
                         "beside the repository)")
     return p
+
+
+def spacings(args, *, quick, quick_t_end, default, accept_dx=None) -> tuple[Path, list, float]:
+    """(output folder, grid spacings coarsest first, simulated time) of a run.py: with
+    --quick OUT/quick, --dx or ``quick`` and ``quick_t_end``; else OUT, --dx or ``default``
+    and --t-end, ``accept_dx`` added when a finer spacing is asked without it (the finer
+    runs are compared with it)."""
+    if args.quick:
+        return Path(args.out) / "quick", sorted(set(args.dx or quick), reverse=True), quick_t_end
+    dxs = list(args.dx or default)
+    if accept_dx is not None and any(x < accept_dx for x in dxs) and accept_dx not in dxs:
+        dxs = [accept_dx] + dxs
+    return Path(args.out), sorted(set(dxs), reverse=True), args.t_end
 
 
 def page_paths(args, out, page_name, quick) -> tuple[Path, Path]:

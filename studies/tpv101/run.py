@@ -287,15 +287,8 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
 
     problem = args.problem
-    out = main_out = Path(args.out)
-    t_end = args.t_end
-    if args.quick:
-        out = main_out = out / "quick"
-        dxs = args.dx or [600.0, 400.0]
-        t_end = 4.0
-    else:
-        dxs = args.dx or DEFAULT_DX[problem]
-    dxs = sorted({float(x) for x in dxs}, reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=4.0, default=DEFAULT_DX[problem])
+    main_out = out
     if t_end is not None and not args.quick and abs(t_end - T_END[problem]) > 1e-9:
         p.error(f"--t-end other than {T_END[problem]:g} s is only for --quick")
     domain = tuple(args.domain) if args.domain else None

@@ -90,16 +90,8 @@ def load_run(out, dx):
     return H.load_run(store_path(out, dx))
 
 
-def sim_series(st, station):
-    """cracklab's strike components at one station (stress in MPa, as the reference)."""
-    s = st.sel(station=station)
-    return {"t": st.t.values, "slip": s.delta_1.values, "rate": s.v_1.values,
-            "stress": s.tau_1.values / 1e6, "rate3": s.v_3.values}
-
-
-def ref_series(ref):
-    """The reference's strike (h) components under the names of ``sim_series``."""
-    return {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"], "stress": ref["h_stress"]}
+sim_series = H.strike_series
+ref_series = H.reference_series
 
 
 def compare_run(st, refs):
@@ -108,12 +100,7 @@ def compare_run(st, refs):
     out = {}
     hypo = (float(st.x1.sel(station="faultst000dp000")), float(st.x3.sel(station="faultst000dp000")))
     for s in REF_STATIONS:
-        sim = sim_series(st, s)
-        ref = ref_series(refs[s])
-        cmp = C.compare_station(sim, ref)
-        cmp["accept"] = C.acceptance(cmp)
-        cmp["series_rms"] = C.series_errors(sim, ref)
-        cmp["max_abs_v3"] = float(np.max(np.abs(sim["rate3"])))
+        cmp, sim, ref = H.compare_strike(st, s, refs[s])
         cmp["late_peak_rate"] = {"sim": float(np.max(sim["rate"][sim["t"] > LATE], initial=0.0)),
                                  "ref": float(np.max(ref["rate"][ref["t"] > LATE], initial=0.0))}
         cmp["offset_km"] = [(float(st.x1.sel(station=s)) - hypo[0]) / 1e3,
@@ -553,7 +540,6 @@ def main(argv=None) -> int:
                    help="periodic cell in m instead of 48000 24000: a replica check into OUT/domain<L1>x<L3>km, no page")
     args = p.parse_args(argv)
 
-    out = Path(args.out)
     variant = None
     if args.formulation != FORMULATION:
         variant = args.formulation
@@ -563,16 +549,8 @@ def main(argv=None) -> int:
         variant = f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km"
     if sum(x is not None for x in (args.beta, args.domain)) + (args.formulation != FORMULATION) > 1:
         p.error("give one of --beta, --domain, --formulation product|displacement at a time")
-    if args.quick:
-        out = out / "quick"
-        dxs = args.dx or [600.0, 400.0]
-        t_end = 6.0
-    else:
-        dxs = args.dx or [C.ACCEPT_DX]
-        t_end = args.t_end
-        if any(x < C.ACCEPT_DX for x in dxs) and C.ACCEPT_DX not in dxs:
-            dxs = [C.ACCEPT_DX] + list(dxs)       # the 50 m check compares with the 100 m run
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=6.0, default=[C.ACCEPT_DX],
+                                 accept_dx=C.ACCEPT_DX)
     main_out = out
     if variant:
         out = out / variant

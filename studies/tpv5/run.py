@@ -133,16 +133,8 @@ def load_run(out, dx):
     return H.load_run(store_path(out, dx))
 
 
-def sim_series(st, station):
-    """cracklab's strike components at one station (stress in MPa, as the reference)."""
-    s = st.sel(station=station)
-    return {"t": st.t.values, "slip": s.delta_1.values, "rate": s.v_1.values,
-            "stress": s.tau_1.values / 1e6, "rate3": s.v_3.values}
-
-
-def ref_series(ref):
-    """The reference's strike (h) components under the names of ``sim_series``."""
-    return {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"], "stress": ref["h_stress"]}
+sim_series = H.strike_series
+ref_series = H.reference_series
 
 
 def compare_run(st, refs):
@@ -152,12 +144,7 @@ def compare_run(st, refs):
     out = {}
     xc = float(st.x1.sel(station="faultst000dp075"))
     for s in REF_STATIONS:
-        sim = sim_series(st, s)
-        ref = ref_series(refs[s])
-        cmp = C.compare_station(sim, ref)
-        cmp["accept"] = C.acceptance(cmp)
-        cmp["series_rms"] = C.series_errors(sim, ref)
-        cmp["max_abs_v3"] = float(np.max(np.abs(sim["rate3"])))
+        cmp, sim, ref = H.compare_strike(st, s, refs[s])
         cmp["ref_max_abs_v3"] = float(np.max(np.abs(refs[s]["v_rate"])))
         cmp["position_km"] = [(float(st.x1.sel(station=s)) - xc) / 1e3, float(st.x3.sel(station=s)) / 1e3]
         if s == SURFACE:
@@ -785,19 +772,12 @@ def main(argv=None) -> int:
         return 0
     if args.beta is not None and args.domain is not None:
         p.error("give one of --beta, --domain at a time")
-    out = Path(args.out)
     variant = (f"beta{args.beta:g}" if args.beta is not None else
                f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km" if args.domain is not None else None)
     if args.formulation:
         variant = args.formulation + (f"_{variant}" if variant else "")
-    if args.quick:
-        out = out / "quick"
-        dxs, t_end = args.dx or [600.0, 400.0], 6.0
-    else:
-        dxs, t_end = args.dx or [C.ACCEPT_DX], args.t_end
-        if any(x < C.ACCEPT_DX for x in dxs) and C.ACCEPT_DX not in dxs and not variant:
-            dxs = [C.ACCEPT_DX] + list(dxs)       # the 50 m check compares with the 100 m run
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=6.0, default=[C.ACCEPT_DX],
+                                 accept_dx=None if variant else C.ACCEPT_DX)
     main_out = out
     out.mkdir(parents=True, exist_ok=True)
     if variant:

@@ -651,13 +651,7 @@ def main(argv=None) -> int:
     normal = {k: v for k, v in (("normal_slip_scale", args.normal_slip_scale), ("normal_time", args.normal_time))
               if v is not None}
 
-    out = Path(args.out)
-    if args.quick:
-        out = out / "quick"
-        dxs, t_end = args.dx or [400.0], 6.0
-    else:
-        dxs, t_end = args.dx or [C.ACCEPT_DX], args.t_end
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[400.0], quick_t_end=6.0, default=[C.ACCEPT_DX])
     out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
         for dx in dxs:
