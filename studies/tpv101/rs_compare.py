@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.benchmarks import measures
 from studies.benchmarks.harness import reference_dir
 
 THRESHOLD = 1e-3                 # m/s: rupture = slip rate first above 1 mm/s
@@ -71,17 +72,9 @@ def load_reference_field(directory=None):
 
 def rupture_time(t, rate, threshold=THRESHOLD, interpolate=True) -> float:
     """First time ``rate`` exceeds ``threshold`` (NaN if it never does): linearly
-    interpolated between that sample and the one before (``interpolate``), else that sample's time."""
-    t = np.asarray(t, dtype=float)
-    rate = np.asarray(rate, dtype=float)
-    above = np.nonzero(rate > threshold)[0]
-    if above.size == 0:
-        return float("nan")
-    i = int(above[0])
-    if not interpolate or i == 0:
-        return float(t[i])
-    r0, r1 = rate[i - 1], rate[i]
-    return float(t[i - 1] + (threshold - r0) / (r1 - r0) * (t[i] - t[i - 1]))
+    interpolated between that sample and the one before (``interpolate``, this study's
+    definition), else that sample's time (``studies.benchmarks.measures.rupture_time``)."""
+    return measures.rupture_time(t, rate, threshold, interpolate)
 
 
 def station_metrics(t, slip, rate, *, at=None, threshold=THRESHOLD) -> dict:
