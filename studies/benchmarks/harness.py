@@ -219,10 +219,11 @@ def analyse_runs(stores: dict, compare, extra=None) -> dict:
 
 # ------------------------------------------------------------------------------ command line
 def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help: str, t_end=12.0,
-           t_end_help="simulated time of the runs (s)", first=()) -> argparse.ArgumentParser:
+           t_end_help="simulated time of the runs (s)", page=None, first=()) -> argparse.ArgumentParser:
     """The options every study's run.py has: -o, --dx, --t-end, --quick, --report-only,
     --force, --figures, --page, --reference (``name``: the study's folder under out/ and
-    its page under docs/; ``first``: (args, kwargs) of options added before them)."""
+    its page docs/<name>.md unless ``page`` names it; ``first``: (args, kwargs) of options
+    added before them)."""
     p = argparse.ArgumentParser(description=doc.splitlines()[0])
     for a, kw in first:
         p.add_argument(*a, **kw)
@@ -233,7 +234,7 @@ def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help=f"page to write (default docs/{name}.md)")
+    p.add_argument("--page", default=None, help=f"page to write (default {page or f'docs/{name}.md'})")
     p.add_argument("--reference", default=None,
                    help=f"{reference_help} (default ${REFERENCE_ENV}/<name>, else ../shared/reference/<name> "
                         "beside the repository)")

@@ -280,7 +280,7 @@ def main(argv=None) -> int:
     p = H.parser(__doc__, "tpv101", dx_help="grid spacings in m (default 200 100 50)",
                  quick_help="600 m and 400 m, 4 s, into OUT/quick (acceptance not checked)",
                  reference_help="directory of the uguca reference", t_end=None,
-                 t_end_help="simulated time (default 15 s, 12 s for tpv103)",
+                 t_end_help="simulated time (default 15 s, 12 s for tpv103)", page="docs/<problem>.md",
                  first=[(("--problem",), {"choices": ("tpv101", "tpv103"), "default": "tpv101"})])
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
                    help="periodic cell in m instead of 72000 36000: a cell check into OUT/domain<L1>x<L3>km, no page")
