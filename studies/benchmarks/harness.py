@@ -59,6 +59,31 @@ def mdsbi_station(name: str, station: str, directory=None) -> dict:
 
 
 # ------------------------------------------------------------------------------ runs
+def numerics(formulation="product2", engine="exponential"):
+    """The studies' time stepping: ``Numerics`` with the rupture threshold of the measures
+    (1 mm/s)."""
+    from cracklab.model.scene import Numerics
+
+    from studies.benchmarks.measures import THRESHOLD
+
+    return Numerics(formulation=formulation, engine=engine, rupture_threshold=THRESHOLD)
+
+
+def build(builder, dx, *, t_end=None, domain=None, fields=("delta_1",), **kw):
+    """``builder(dx=dx, ...)`` (a ``cracklab.scenes`` builder; ``t_end`` and the periodic cell
+    ``domain`` passed when given, ``kw`` as they are) recording its stations every step, the
+    rupture time of the whole plane and ``fields`` at the end."""
+    from cracklab.model.record import Record
+
+    if t_end is not None:
+        kw["t_end"] = float(t_end)
+    if domain is not None:
+        kw["domain"] = tuple(float(x) for x in domain)
+    base = builder(dx=dx, **kw)
+    rec = Record(fields=tuple(fields), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
+    return base.replace(record=rec)
+
+
 def store_path(out, tag) -> Path:
     """OUT/<tag>.zarr (its metadata: the .json next to it)."""
     return Path(out) / f"{tag}.zarr"

@@ -12,15 +12,8 @@ def build_scene(problem, dx, t_end=None, domain=None):
     """``scenes.<problem>`` (tpv101 or tpv103) at ``dx`` with its stations, the rupture
     time of the whole plane and the slip field at the end."""
     from cracklab import scenes
-    from cracklab.model.record import Record
 
-    builder = getattr(scenes, problem)
-    kw = {} if t_end is None else {"t_end": float(t_end)}
-    if domain is not None:
-        kw["domain"] = tuple(float(x) for x in domain)
-    base = builder(dx=float(dx), **kw)
-    rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
-    return base.replace(record=rec)
+    return H.build(getattr(scenes, problem), float(dx), t_end=t_end, domain=domain)
 
 
 def tag(problem, dx, domain=None):

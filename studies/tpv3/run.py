@@ -58,21 +58,15 @@ ENGINE = "exponential"
 
 
 def numerics(formulation=None):
-    from cracklab.model.scene import Numerics
-
-    return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
+    return H.numerics(formulation or FORMULATION, ENGINE)
 
 
 def build_scene(dx, t_end, formulation=None, beta=None, domain=None):
     """``scenes.tpv3`` with its own stations (the reference's two among them), the
     rupture time of the whole fault and the slip field at the end."""
-    from cracklab.model.record import Record
     from cracklab.scenes import tpv3
 
-    extra = {} if domain is None else {"domain": tuple(float(x) for x in domain)}
-    base = tpv3(dx=dx, t_end=t_end, beta=beta, numerics=numerics(formulation), **extra)
-    rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
-    return base.replace(record=rec)
+    return H.build(tpv3, dx, t_end=t_end, domain=domain, beta=beta, numerics=numerics(formulation))
 
 
 def store_path(out, dx):
@@ -362,11 +356,10 @@ the two axes), and the largest difference between faultst000dp-030 and its mirro
 ![rupture time]({figrel}/tpv3_rupture_time.png)
 
 {_variant_section(res)}"""
-    notes = Path(notes_path or HERE / "discussion.md")
     if f"{C.ACCEPT_DX:g}" not in res["runs"]:
         text += f"*The discussion (`studies/tpv3/discussion.md`) needs the {C.ACCEPT_DX:g} m run.*\n"
-    elif notes.exists():
-        text += H.fill_notes(notes, page_numbers(res, dxs))
+    else:
+        text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 

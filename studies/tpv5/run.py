@@ -68,21 +68,15 @@ SCATTER = 0.005           # s: the 1 mm/s crossing scatters by a few ms about it
 
 
 def numerics(formulation=None):
-    from cracklab.model.scene import Numerics
-
-    return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
+    return H.numerics(formulation or FORMULATION, ENGINE)
 
 
 def build_scene(dx, t_end, beta=None, domain=None, formulation=None):
     """``scenes.tpv5`` with its own stations, the rupture time of the half plane and the
     slip along strike at the end."""
-    from cracklab.model.record import Record
     from cracklab.scenes import tpv5
 
-    extra = {} if domain is None else {"domain": tuple(float(x) for x in domain)}
-    base = tpv5(dx=dx, t_end=t_end, beta=beta, numerics=numerics(formulation), **extra)
-    rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
-    return base.replace(record=rec)
+    return H.build(tpv5, dx, t_end=t_end, domain=domain, beta=beta, numerics=numerics(formulation))
 
 
 def store_path(out, dx):
@@ -524,11 +518,10 @@ marked):
 ![rupture time]({figrel}/tpv5_rupture_time.png)
 
 {variant_section(res)}"""
-    notes = Path(notes_path or HERE / "discussion.md")
     if f"{C.ACCEPT_DX:g}" not in res["runs"]:
         text += f"*The discussion (`studies/tpv5/discussion.md`) needs the {C.ACCEPT_DX:g} m run.*\n"
-    elif notes.exists():
-        text += H.fill_notes(notes, page_numbers(res, dxs))
+    else:
+        text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 

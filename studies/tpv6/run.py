@@ -523,9 +523,7 @@ levels:
 ![rupture time]({figrel}/tpv6_rupture_time.png)
 {other_rows(res, dxs)}{surface_rows(res)}
 """
-    notes = Path(notes_path or HERE / "discussion.md")
-    if notes.exists():
-        text += H.fill_notes(notes, page_numbers(res, dxs))
+    text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 
