@@ -1,18 +1,22 @@
 """The harness of the benchmark studies (studies/tpv3, tpv5, tpv6, tpv101; docs/tpv3.md,
 tpv5.md, tpv6.md, tpv101.md, tpv103.md): what every benchmark does the same way.
 
-* ``reference_dir``: where a benchmark's reference lies (``--reference DIR``, the
-  environment variable ``CRACKLAB_REFERENCE``, or ``shared/reference/<name>`` beside the
-  repository);
+* ``reference_dir``, ``mdsbi_station``: where a benchmark's reference lies (``--reference
+  DIR``, the environment variable ``CRACKLAB_REFERENCE``, or ``shared/reference/<name>``
+  beside the repository) and one MDSBI station file read from it;
+* ``numerics``, ``build``: a ``cracklab.scenes`` builder's scene with the studies' time
+  stepping, its stations, the rupture time and the final fields recorded;
 * ``run_scene``, ``complete``, ``load_run``, ``read_meta``: one run per grid spacing,
   streamed to OUT/<tag>.zarr with its wall time in OUT/<tag>.json, reused when the store
   holds a finished run of the same scene;
-* ``parser``, ``page_paths``, ``figure_link``, ``command_line``: the command line shared by
-  the studies' ``run.py`` and where its page and figures go;
-* ``ok``, ``per_dx``, ``station_rows``, ``verdict_lines``, ``report``, ``exit_status``,
-  ``fill_notes``: the page's and the console's pieces of the slip-weakening acceptance
-  (``studies.benchmarks.measures.check_acceptance``);
-* ``pyplot``, ``save``, ``station_figure``: the figures' common steps.
+* ``strike_series``, ``reference_series``, ``compare_strike``, ``analyse_runs``: the
+  stations of a run against the reference, and the runs' metadata;
+* ``parser``, ``spacings``, ``page_paths``, ``figure_link``, ``command_line``: the command
+  line shared by the studies' ``run.py`` and where its runs, page and figures go;
+* ``ok``, ``per_dx``, ``station_rows``, ``measure_rows``, ``verdict_lines``, ``report``,
+  ``exit_status``, ``fill_notes``: the page's and the console's pieces of the acceptance
+  (``studies.benchmarks.measures.check_acceptance``) and the discussion's placeholders;
+* ``pyplot``, ``save``, ``station_figure``, ``front_figure``: the figures' common steps.
 
 Each benchmark (``studies.<name>.run``) keeps its stations, acceptance limits, page text
 and its own analyses. Run a study from the repository's root as a module, e.g.

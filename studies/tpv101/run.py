@@ -152,7 +152,8 @@ def fig_reference_stations(problem, out, dxs, figdir, ref_dir=None):
     for s in C.REF_STATIONS:
         ref = C.load_reference(s, ref_dir)
         fig = H.station_figure(ref, sts, lambda st: series(st, s), f"TPV101, {s}: strike component",
-                               ref_keys=("slip", "rate", "stress"), ref_label="uguca, 100 m", colours=COLOURS, alpha=0.5)
+                               ref_keys=("slip", "rate", "stress"), ref_label="uguca, 100 m", colours=COLOURS,
+                               alpha=0.5)
         paths.append(H.save(fig, Path(figdir) / f"{problem}_{s}.png", 100))
         fig = H.front_figure(ref["t"], ref["rate"], C.rupture_time(ref["t"], ref["rate"]), sts,
                              lambda st: series(st, s), f"{s}: slip rate around the rupture front",
