@@ -25,6 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.benchmarks import measures
+from studies.benchmarks.harness import reference_dir
+
 THRESHOLD = 1e-3                 # m/s: rupture = slip rate first above 1 mm/s
 REF_COLUMNS = ("t", "slip", "rate", "stress", "theta", "log10_theta")
 REF_STATIONS = ("faultst000dp075", "faultst000dp030", "faultst090dp075")
@@ -39,18 +42,17 @@ TOL_CONVERGENCE = 0.05
 TOL_CONVERGENCE_SLIP = 0.05      # relative final slip between 100 m and 50 m (TPV103)
 
 
+REFERENCE = "tpv101_uguca"
+
+
 def default_reference_dir() -> Path:
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        cand = parent / "shared" / "reference" / "tpv101_uguca"
-        if cand.is_dir():
-            return cand
-    return Path("/work/shared/reference/tpv101_uguca")
+    """The reference's folder when no ``--reference`` is given (``harness.reference_dir``)."""
+    return reference_dir(REFERENCE)
 
 
 def load_reference(station: str, directory=None) -> dict:
     """uguca's series at one station: dict of arrays keyed by ``REF_COLUMNS``."""
-    path = Path(directory or default_reference_dir()) / f"{station}.txt"
+    path = reference_dir(REFERENCE, directory) / f"{station}.txt"
     data = np.loadtxt(path, comments="#")
     if data.ndim != 2 or data.shape[1] != len(REF_COLUMNS):
         raise ValueError(f"{path}: expected {len(REF_COLUMNS)} columns, got shape {data.shape}")
@@ -62,7 +64,7 @@ def load_reference_field(directory=None):
     hypocentre's), rupture time (s) as a (strike, dip) array, NaN where it never ruptured)."""
     import xarray as xr
 
-    path = Path(directory or default_reference_dir()) / "rupture_time.nc"
+    path = reference_dir(REFERENCE, directory) / "rupture_time.nc"
     with xr.open_dataset(path) as ds:
         rt = ds.rupture_time.transpose("strike", "depth").values.astype(float)
         return ds.strike.values.astype(float), ds.depth.values.astype(float) - HYPO_DEPTH, rt
@@ -70,17 +72,9 @@ def load_reference_field(directory=None):
 
 def rupture_time(t, rate, threshold=THRESHOLD, interpolate=True) -> float:
     """First time ``rate`` exceeds ``threshold`` (NaN if it never does): linearly
-    interpolated between that sample and the one before (``interpolate``), else that sample's time."""
-    t = np.asarray(t, dtype=float)
-    rate = np.asarray(rate, dtype=float)
-    above = np.nonzero(rate > threshold)[0]
-    if above.size == 0:
-        return float("nan")
-    i = int(above[0])
-    if not interpolate or i == 0:
-        return float(t[i])
-    r0, r1 = rate[i - 1], rate[i]
-    return float(t[i - 1] + (threshold - r0) / (r1 - r0) * (t[i] - t[i - 1]))
+    interpolated between that sample and the one before (``interpolate``, this study's
+    definition), else that sample's time (``studies.benchmarks.measures.rupture_time``)."""
+    return measures.rupture_time(t, rate, threshold, interpolate)
 
 
 def station_metrics(t, slip, rate, *, at=None, threshold=THRESHOLD) -> dict:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-import rs_compare as C
+from studies.tpv101 import rs_compare as C
 
 NAMES = {"tpv101": "TPV101", "tpv103": "TPV103"}
 
@@ -88,7 +88,7 @@ def _distinct(name):
     return st >= 0 and dp <= 75
 
 
-def _mirror(name):
+def mirror(name):
     """The stations a whole-space station's series equals by symmetry."""
     from cracklab.scenes import tpv3_station_name
 
@@ -103,7 +103,7 @@ def symmetry(res):
     for run in res["runs"].values():
         st = run["stations"]
         for name in st:
-            for other in _mirror(name) & set(st):
+            for other in mirror(name) & set(st):
                 for q in worst:
                     worst[q] = max(worst[q], abs(st[name][q] - st[other][q]))
     return worst
@@ -260,7 +260,7 @@ def _common_notes(res):
 
 
 def tpv101_page(res, figrel, figs, command):
-    cmd = command or "python studies/tpv101/run.py"
+    cmd = command or "python -m studies.tpv101.run"
     dom = domain_table(res)
     dom_txt = "" if dom is None else f"""
 ## The periodic cell
@@ -357,7 +357,7 @@ peak slip rates changed by up to 30 %, its rupture times by 0.058 s RMS):
 
 
 def tpv103_page(res, figrel, figs, command):
-    cmd = command or "python studies/tpv101/run.py --problem tpv103"
+    cmd = command or "python -m studies.tpv101.run --problem tpv103"
     dxs = _dxs(res)
     stab = []
     for dx in dxs:

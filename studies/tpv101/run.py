@@ -1,8 +1,8 @@
 """SCEC TPV101 and TPV103 (rate-and-state friction): convergence and, for TPV101, the
 independent spectral BI code uguca (docs/tpv101.md, docs/tpv103.md).
 
-    python studies/tpv101/run.py [--problem tpv101|tpv103] [--dx 200 100 50] [-o OUT]
-                                 [--domain L1 L3] [--report-only] [--force] [--quick]
+    python -m studies.tpv101.run [--problem tpv101|tpv103] [--dx 200 100 50] [-o OUT]
+                                  [--domain L1 L3] [--report-only] [--force] [--quick]
 
 Runs ``cracklab.scenes.tpv101`` or ``scenes.tpv103`` at 200, 100 and 50 m (``--dx`` to choose)
 one after the other, each streamed to OUT/<problem>_dx<dx>.zarr
@@ -10,7 +10,7 @@ one after the other, each streamed to OUT/<problem>_dx<dx>.zarr
 with its wall time in the .json next to it; then
 
 * TPV101: compares the 100 m run with uguca's at its three stations and over the
-  rupture-time field (shared/reference/tpv101_uguca), and every run with the next finer;
+  rupture-time field (shared/reference/tpv101_uguca, or ``--reference DIR``), and every run with the next finer;
 * TPV103: checks that the 100 m run reaches 12 s with finite values, and the
   convergence between 100 and 50 m;
 
@@ -28,19 +28,18 @@ Time stepping: the builders' own (the product scheme, beta 0.25), default engine
 """
 from __future__ import annotations
 
-import argparse
 import json
 import sys
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
+from studies.benchmarks import harness as H
+from studies.tpv101 import rs_compare as C
+from studies.tpv101 import rs_runs as R
+from studies.tpv101.rs_page import write_page
 
-import rs_compare as C  # noqa: E402
-import rs_runs as R  # noqa: E402
+ROOT = H.ROOT
 
 DEFAULT_DX = {"tpv101": [200.0, 100.0, 50.0], "tpv103": [200.0, 100.0, 50.0]}
 T_END = {"tpv101": 15.0, "tpv103": 12.0}
@@ -146,62 +145,26 @@ def exit_status(res) -> int:
 
 
 # ------------------------------------------------------------------------------ figures
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def fig_reference_stations(problem, out, dxs, figdir, ref_dir=None):
     """TPV101 at uguca's stations: slip, slip rate, shear stress; and the slip rate around the front."""
-    plt = _plt()
     paths = []
     sts = {f"{dx:g}": R.load_run(out, problem, dx)[2] for dx in dxs}
     for s in C.REF_STATIONS:
         ref = C.load_reference(s, ref_dir)
-        fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.5), sharex=True)
-        for ax, key, label in zip(axes, ("slip", "rate", "stress"), ("slip (m)", "slip rate (m/s)",
-                                                                      "shear stress (MPa)")):
-            ax.plot(ref["t"], ref[key], color="k", lw=2.2, alpha=0.5, label="uguca, 100 m")
-            for name, st in sts.items():
-                sim = series(st, s)
-                ax.plot(sim["t"], sim[key], color=COLOURS.get(name), lw=1.0, label=f"cracklab, {name} m")
-            ax.set_ylabel(label)
-            ax.grid(alpha=0.3)
-        axes[0].legend(loc="upper left", fontsize=8)
-        axes[-1].set_xlabel("time (s)")
-        axes[0].set_title(f"TPV101, {s}: strike component", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"{problem}_{s}.png"
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
-        fig, ax = plt.subplots(figsize=(7.5, 3.4))
-        t_r = C.rupture_time(ref["t"], ref["rate"])
-        ax.plot(ref["t"], ref["rate"], color="k", lw=2.2, alpha=0.5, label="uguca, 100 m")
-        for name, st in sts.items():
-            sim = series(st, s)
-            ax.plot(sim["t"], sim["rate"], color=COLOURS.get(name), lw=1.0, label=f"cracklab, {name} m")
-        ax.set_xlim(t_r - 0.3, t_r + 1.5)
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("slip rate (m/s)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        ax.set_title(f"{s}: slip rate around the rupture front", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"{problem}_{s}_front.png"
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
+        fig = H.station_figure(ref, sts, lambda st: series(st, s), f"TPV101, {s}: strike component",
+                               ref_keys=("slip", "rate", "stress"), ref_label="uguca, 100 m", colours=COLOURS,
+                               alpha=0.5)
+        paths.append(H.save(fig, Path(figdir) / f"{problem}_{s}.png", 100))
+        fig = H.front_figure(ref["t"], ref["rate"], C.rupture_time(ref["t"], ref["rate"]), sts,
+                             lambda st: series(st, s), f"{s}: slip rate around the rupture front",
+                             ref_label="uguca, 100 m", colours=COLOURS, after=1.5, alpha=0.5, height=3.4)
+        paths.append(H.save(fig, Path(figdir) / f"{problem}_{s}_front.png", 100))
     return paths
 
 
 def fig_all_stations(problem, out, dxs, figdir, key="rate"):
     """Every SCEC station's slip rate (or slip) at each grid spacing."""
-    plt = _plt()
+    plt = H.pyplot()
     sts = {f"{dx:g}": R.load_run(out, problem, dx)[2] for dx in dxs}
     names = [str(s) for s in next(iter(sts.values())).station.values]
     order = sorted(names, key=lambda n: tuple(reversed(station_offsets(n))))
@@ -219,17 +182,13 @@ def fig_all_stations(problem, out, dxs, figdir, key="rate"):
         ax.set_ylabel("slip rate (m/s)" if key == "rate" else "slip (m)")
     fig.suptitle(f"{NAMES.get(problem, problem)}: strike slip {'rate ' if key == 'rate' else ''}at SCEC's "
                  f"stations, cracklab at {', '.join(sts)} m", fontsize=10)
-    fig.tight_layout()
-    p = Path(figdir) / f"{problem}_stations_{key}.png"
-    fig.savefig(p, dpi=90)
-    plt.close(fig)
-    return p
+    return H.save(fig, Path(figdir) / f"{problem}_stations_{key}.png", 90)
 
 
 def fig_rupture(problem, fields, dxs, figdir, ref_dir=None, levels=None):
     """Rupture-time contours of every run (and uguca's), and the differences 100 - 50 m and
     100 m - uguca."""
-    plt = _plt()
+    plt = H.pyplot()
     levels = np.arange(1.0, 12.01, 1.0) if levels is None else levels
     panels = [("contours", None)]
     fine = sorted(dxs)
@@ -279,16 +238,12 @@ def fig_rupture(problem, fields, dxs, figdir, ref_dir=None, levels=None):
         ax.set_aspect("equal")
         ax.set_xlabel("along strike from the hypocentre (km)")
         ax.set_ylabel("depth below the hypocentre (km)")
-    fig.tight_layout()
-    p = Path(figdir) / f"{problem}_rupture_time.png"
-    fig.savefig(p, dpi=100)
-    plt.close(fig)
-    return p
+    return H.save(fig, Path(figdir) / f"{problem}_rupture_time.png", 100)
 
 
 def fig_convergence(res, figdir):
     """The differences between successive grid spacings against the finer spacing."""
-    plt = _plt()
+    plt = H.pyplot()
     problem = res["problem"]
     fig, ax = plt.subplots(figsize=(6.5, 4.4))
     pairs = [tuple(float(x) for x in k.split("-")) for k in res["fields"]]
@@ -311,15 +266,7 @@ def fig_convergence(res, figdir):
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     ax.set_title(f"{NAMES.get(problem, problem)}: differences between successive grid spacings", fontsize=10)
-    fig.tight_layout()
-    p = Path(figdir) / f"{problem}_convergence.png"
-    fig.savefig(p, dpi=100)
-    plt.close(fig)
-    return p
-
-
-# ------------------------------------------------------------------------------ page
-from rs_page import write_page  # noqa: E402
+    return H.save(fig, Path(figdir) / f"{problem}_convergence.png", 100)
 
 
 def report(res):
@@ -331,32 +278,18 @@ def report(res):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--problem", choices=("tpv101", "tpv103"), default="tpv101")
-    p.add_argument("-o", "--out", default=str(ROOT / "out" / "tpv101"))
-    p.add_argument("--dx", type=float, nargs="+", default=None,
-                   help="grid spacings in m (default 200 100 50)")
-    p.add_argument("--t-end", type=float, default=None, help="simulated time (default 15 s, 12 s for tpv103)")
+    p = H.parser(__doc__, "tpv101", dx_help="grid spacings in m (default 200 100 50)",
+                 quick_help="600 m and 400 m, 4 s, into OUT/quick (acceptance not checked)",
+                 reference_help="directory of the uguca reference", t_end=None,
+                 t_end_help="simulated time (default 15 s, 12 s for tpv103)", page="docs/<problem>.md",
+                 first=[(("--problem",), {"choices": ("tpv101", "tpv103"), "default": "tpv101"})])
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
                    help="periodic cell in m instead of 72000 36000: a cell check into OUT/domain<L1>x<L3>km, no page")
-    p.add_argument("--quick", action="store_true", help="600 m and 400 m, 4 s, into OUT/quick (acceptance not checked)")
-    p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
-    p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
-    p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/<problem>.md)")
-    p.add_argument("--reference", default=None, help="directory of the uguca reference")
     args = p.parse_args(argv)
 
     problem = args.problem
-    out = main_out = Path(args.out)
-    t_end = args.t_end
-    if args.quick:
-        out = main_out = out / "quick"
-        dxs = args.dx or [600.0, 400.0]
-        t_end = 4.0
-    else:
-        dxs = args.dx or DEFAULT_DX[problem]
-    dxs = sorted({float(x) for x in dxs}, reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=4.0, default=DEFAULT_DX[problem])
+    main_out = out
     if t_end is not None and not args.quick and abs(t_end - T_END[problem]) > 1e-9:
         p.error(f"--t-end other than {T_END[problem]:g} s is only for --quick")
     domain = tuple(args.domain) if args.domain else None
@@ -365,7 +298,7 @@ def main(argv=None) -> int:
     out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
         for dx in dxs:
-            R.run_one(problem, dx, out, t_end=t_end, domain=domain, force=args.force, progress=False)
+            R.run_one(problem, dx, out, t_end=t_end, domain=domain, force=args.force)
     if domain is not None:
         checks = {f"{dx:g}": domain_check(problem, main_out, dx, out, domain, args.reference) for dx in dxs
                   if R.store_path(main_out, problem, dx).with_suffix(".json").exists()}
@@ -383,9 +316,7 @@ def main(argv=None) -> int:
         res["domain_checks"] = {f.parent.name: json.loads(f.read_text()) for f in found}
     (out / f"{problem}_results.json").write_text(json.dumps(res, indent=1, default=float))
     report(res)
-    figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / f"{problem}.md" if args.quick else ROOT / "docs" / f"{problem}.md"))
-    figdir.mkdir(parents=True, exist_ok=True)
+    figdir, page = H.page_paths(args, out, problem, args.quick)
     figs = []
     if problem == "tpv101":
         figs += fig_reference_stations(problem, out, dxs, figdir, args.reference)
@@ -394,13 +325,8 @@ def main(argv=None) -> int:
     figs.append(fig_rupture(problem, fields, dxs, figdir, args.reference))
     if len(dxs) >= 2:
         figs.append(fig_convergence(res, figdir))
-    try:
-        figrel = figdir.resolve().relative_to(page.resolve().parent)
-    except ValueError:
-        figrel = figdir.resolve()
-    argv_used = sys.argv[1:] if argv is None else list(argv)
-    write_page(res, page, figrel.as_posix(), [f.name for f in figs],
-               command=" ".join(["python", "studies/tpv101/run.py"] + argv_used))
+    write_page(res, page, H.figure_link(figdir, page), [f.name for f in figs],
+               command=H.command_line("studies.tpv101.run", argv))
     print(f"wrote {page}, figures in {figdir}, results in {out / f'{problem}_results.json'}")
     return exit_status(res) if not args.quick else 0
 

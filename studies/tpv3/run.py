@@ -1,13 +1,13 @@
 """SCEC TPV3 with cracklab against the independent spectral BI code MDSBI (docs/tpv3.md).
 
-    python studies/tpv3/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
-                               [--beta B | --domain L1 L3 | --formulation product|displacement]
+    python -m studies.tpv3.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
+                                [--beta B | --domain L1 L3 | --formulation product|displacement]
 
 Runs ``cracklab.scenes.tpv3`` at each grid spacing (default 100 m; ``--dx 100 50`` adds
 50 m, about seven times the cost), streams each run to OUT/tpv3_dx<dx>.zarr (station series
 every step, rupture time of the whole fault, the slip field at the end) with its wall
 time in OUT/tpv3_dx<dx>.json, compares the reference's two stations
-(shared/reference/tpv3_mdsbi: faultst075dp000, 7.5 km along strike, and
+(shared/reference/tpv3_mdsbi, or ``--reference DIR``: faultst075dp000, 7.5 km along strike, and
 faultst000dp-030, 3.0 km along dip) and writes
 
 * OUT/tpv3_results.json         every number of the page, and the acceptance verdict,
@@ -35,20 +35,17 @@ cost and memory per step), default thread counts.
 """
 from __future__ import annotations
 
-import argparse
 import json
-import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
+from studies.benchmarks import harness as H
+from studies.tpv3 import compare as C
 
-import compare as C  # noqa: E402
+HERE = Path(__file__).resolve().parent
+ROOT = H.ROOT
 
 REF_STATIONS = ("faultst075dp000", "faultst000dp-030")
 PRETTY = {"faultst075dp000": "faultst075dp000 (7.5 km along strike, in-plane)",
@@ -61,98 +58,34 @@ ENGINE = "exponential"
 
 
 def numerics(formulation=None):
-    from cracklab.model.scene import Numerics
-
-    return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
+    return H.numerics(formulation or FORMULATION, ENGINE)
 
 
 def build_scene(dx, t_end, formulation=None, beta=None, domain=None):
     """``scenes.tpv3`` with its own stations (the reference's two among them), the
     rupture time of the whole fault and the slip field at the end."""
-    from cracklab.model.record import Record
     from cracklab.scenes import tpv3
 
-    extra = {} if domain is None else {"domain": tuple(float(x) for x in domain)}
-    base = tpv3(dx=dx, t_end=t_end, beta=beta, numerics=numerics(formulation), **extra)
-    rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
-    return base.replace(record=rec)
+    return H.build(tpv3, dx, t_end=t_end, domain=domain, beta=beta, numerics=numerics(formulation))
 
 
 def store_path(out, dx):
-    return Path(out) / f"tpv3_dx{dx:g}.zarr"
-
-
-def _complete(store, scene):
-    """The store holds a finished run of this very scene."""
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of
-
-    if not Path(store).exists() or not Path(store).with_suffix(".json").exists():
-        return False
-    try:
-        ds = xr.open_zarr(store, consolidated=False)
-        old = scene_of(ds)
-        return ("rupture_time" in ds and old.to_toml() == scene.to_toml())
-    except Exception:
-        return False
+    return H.store_path(out, f"tpv3_dx{dx:g}")
 
 
 def run_one(dx, t_end, out, force=False, log=print, formulation=None, beta=None, domain=None):
     """Run (or reuse) one grid spacing; return its metadata dict."""
-    from cracklab.output.simulate import simulate
-
     scene = build_scene(dx, t_end, formulation, beta, domain)
-    store = store_path(out, dx)
-    meta_path = store.with_suffix(".json")
-    if not force and _complete(store, scene):
-        meta = json.loads(meta_path.read_text())
-        log(f"dx = {dx:g} m: reusing {store} (ran in {meta['wall_s']:.0f} s)")
-        return meta
-    if store.exists():
-        import shutil
-
-        shutil.rmtree(store)
-    meta_path.unlink(missing_ok=True)
-    g = scene.grid
-    log(f"dx = {dx:g} m: grid {g.n1} x {g.n3}, beta = {scene.beta:.4f}, dt = {scene.dt:.3e} s, "
-        f"{scene.nsteps} steps to t = {t_end:g} s -> {store}")
-    t0 = time.time()
-    simulate(scene, store=str(store), progress=False)
-    wall = time.time() - t0
-    import cracklab
-
-    meta = {"dx": dx, "t_end": scene.nsteps * scene.dt, "n1": g.n1, "n3": g.n3, "beta": scene.beta,
-            "dt": scene.dt, "nsteps": scene.nsteps, "wall_s": wall, "domain": [g.L1, g.L3], "s_per_step": wall / scene.nsteps,
-            "formulation": scene.formulation, "engine": scene.numerics.engine,
-            "cracklab_version": cracklab.__version__, "host": platform.node()}
-    meta_path.write_text(json.dumps(meta, indent=1))
-    log(f"dx = {dx:g} m: done in {wall:.0f} s ({1e3 * wall / scene.nsteps:.1f} ms/step)")
-    return meta
+    return H.run_scene(scene, store_path(out, dx), label=f"dx = {dx:g} m", meta={"dx": dx}, force=force, log=log)
 
 
 # ------------------------------------------------------------------------------ analysis
 def load_run(out, dx):
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of, stations
-
-    ds = xr.open_zarr(store_path(out, dx), consolidated=False)
-    scene = scene_of(ds)
-    st = stations(ds).load()
-    return ds, scene, st
+    return H.load_run(store_path(out, dx))
 
 
-def sim_series(st, station):
-    """cracklab's strike components at one station (stress in MPa, as the reference)."""
-    s = st.sel(station=station)
-    return {"t": st.t.values, "slip": s.delta_1.values, "rate": s.v_1.values,
-            "stress": s.tau_1.values / 1e6, "rate3": s.v_3.values}
-
-
-def ref_series(ref):
-    """The reference's strike (h) components under the names of ``sim_series``."""
-    return {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"], "stress": ref["h_stress"]}
+sim_series = H.strike_series
+ref_series = H.reference_series
 
 
 def compare_run(st, refs):
@@ -161,12 +94,7 @@ def compare_run(st, refs):
     out = {}
     hypo = (float(st.x1.sel(station="faultst000dp000")), float(st.x3.sel(station="faultst000dp000")))
     for s in REF_STATIONS:
-        sim = sim_series(st, s)
-        ref = ref_series(refs[s])
-        cmp = C.compare_station(sim, ref)
-        cmp["accept"] = C.acceptance(cmp)
-        cmp["series_rms"] = C.series_errors(sim, ref)
-        cmp["max_abs_v3"] = float(np.max(np.abs(sim["rate3"])))
+        cmp, sim, ref = H.compare_strike(st, s, refs[s])
         cmp["late_peak_rate"] = {"sim": float(np.max(sim["rate"][sim["t"] > LATE], initial=0.0)),
                                  "ref": float(np.max(ref["rate"][ref["t"] > LATE], initial=0.0))}
         cmp["offset_km"] = [(float(st.x1.sel(station=s)) - hypo[0]) / 1e3,
@@ -181,19 +109,8 @@ def compare_run(st, refs):
 
 
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = json.loads(store_path(out, dx).with_suffix(".json").read_text())
-        ds, scene, st = load_run(out, dx)
-        res["runs"][key] = meta
-        for s, cmp in compare_run(st, refs).items():
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt))
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs))
     res["acceptance"] = C.check_acceptance(res["stations"])
     return res
 
@@ -215,71 +132,28 @@ COLOURS = {"MDSBI": "k", "100": "tab:red", "50": "tab:blue", "600": "tab:orange"
            "300": "tab:olive", "200": "tab:purple"}
 
 
-def _colour(key):
-    return COLOURS.get(key, None)
-
-
 def fig_stations(out, dxs, figdir, ref_dir=None, cells=None):
     """Station series against MDSBI; ``cells``: {label: stations Dataset} of larger-cell
     runs, drawn dashed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     paths = []
     runs = {f"{dx:g}": load_run(out, dx)[2] for dx in dxs}
     cells = cells or {}
     for s in REF_STATIONS:
         ref = C.load_reference(s, ref_dir)
-        fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.5), sharex=True)
-        for ax, key, rkey, label in zip(axes, ("slip", "rate", "stress"), ("h_slip", "h_rate", "h_stress"),
-                                        ("slip (m)", "slip rate (m/s)", "shear stress (MPa)")):
-            ax.plot(ref["t"], ref[rkey], color="k", lw=2.2, alpha=0.55, label="MDSBI, 100 m")
-            for name, st in runs.items():
-                sim = sim_series(st, s)
-                ax.plot(sim["t"], sim[key], color=_colour(name), lw=1.0, label=f"cracklab, {name} m")
-            for label_c, st in cells.items():
-                sim = sim_series(st, s)
-                ax.plot(sim["t"], sim[key], color="tab:green", lw=0.9, ls="--", label=f"cracklab, {label_c}")
-            ax.set_ylabel(label)
-            ax.grid(alpha=0.3)
-        axes[0].legend(loc="upper left", fontsize=8)
-        axes[-1].set_xlabel("time (s)")
-        axes[0].set_title(f"TPV3, {PRETTY[s]}: strike component", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"tpv3_{s}.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
+        fig = H.station_figure(ref, runs, lambda st: sim_series(st, s), f"TPV3, {PRETTY[s]}: strike component",
+                               ref_keys=("h_slip", "h_rate", "h_stress"), ref_label="MDSBI, 100 m", colours=COLOURS,
+                               extra={label: sim_series(st, s) for label, st in cells.items()})
+        paths.append(H.save(fig, Path(figdir) / f"tpv3_{s}.png", 110))
         # zoom on the rupture front
-        fig, ax = plt.subplots(figsize=(7.5, 3.6))
-        t_r = C.rupture_time(ref["t"], ref["h_rate"])
-        ax.plot(ref["t"], ref["h_rate"], color="k", lw=2.2, alpha=0.55, label="MDSBI, 100 m")
-        for name, st in runs.items():
-            sim = sim_series(st, s)
-            ax.plot(sim["t"], sim["rate"], color=_colour(name), lw=1.0, label=f"cracklab, {name} m")
-        ax.set_xlim(t_r - 0.3, t_r + 1.2)
-        ax.set_xlabel("time (s)")
-        ax.set_ylabel("slip rate (m/s)")
-        ax.axhline(C.THRESHOLD, color="0.5", lw=0.5)
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
-        ax.set_title(f"{s}: slip rate around the rupture front", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"tpv3_{s}_front.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
+        fig = H.front_figure(ref["t"], ref["h_rate"], C.rupture_time(ref["t"], ref["h_rate"]), runs,
+                             lambda st: sim_series(st, s), f"{s}: slip rate around the rupture front",
+                             ref_label="MDSBI, 100 m", colours=COLOURS, after=1.2, threshold=C.THRESHOLD)
+        paths.append(H.save(fig, Path(figdir) / f"tpv3_{s}_front.png", 110))
     return paths
 
 
 def fig_rupture(out, dxs, figdir):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = H.pyplot()
     two = len(dxs) >= 2
     fig, axes = plt.subplots(2 if two else 1, 1, figsize=(9, 8.4 if two else 4.6), squeeze=False)
     axes = axes[:, 0]
@@ -295,8 +169,8 @@ def fig_rupture(out, dxs, figdir):
         z = (ds.x3.values - zc) / 1e3
         rt = ds.rupture_time.values.T
         name = f"{dx:g}"
-        cs = ax.contour(x, z, rt, levels=levels, colors=_colour(name), linewidths=0.9)
-        handles.append(plt.Line2D([], [], color=_colour(name), label=f"cracklab, {name} m"))
+        cs = ax.contour(x, z, rt, levels=levels, colors=COLOURS.get(name), linewidths=0.9)
+        handles.append(plt.Line2D([], [], color=COLOURS.get(name), label=f"cracklab, {name} m"))
         if finest is None or dx < finest[0]:
             finest = (dx, x, z, rt, cs)
     ax.clabel(finest[4], levels[1::2], fontsize=7, fmt="%.0f s")
@@ -331,62 +205,10 @@ def fig_rupture(out, dxs, figdir):
         ax.set_aspect("equal")
         ax.set_xlabel("along strike (km)")
         ax.set_ylabel("along dip (km)")
-    fig.tight_layout()
-    p = Path(figdir) / "tpv3_rupture_time.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    return [p]
+    return [H.save(fig, Path(figdir) / "tpv3_rupture_time.png", 110)]
 
 
 # ------------------------------------------------------------------------------ page
-def _ok(b):
-    return "yes" if b else "**no**"
-
-
-def _check_rows(res):
-    """{(station, dx key, quantity): check row} of the acceptance verdict."""
-    return {(r["station"], f"{r['dx']:g}", r["quantity"]): r for r in res["acceptance"]["checks"]}
-
-
-def _limit(rows, s, key, q):
-    r = rows.get((s, key, q))
-    if r is None:
-        return "not checked"
-    return f"{C._fmt_tol(q, r['limit'])}: {_ok(r['pass'])}"
-
-
-def _fmt_station_rows(res, dxs):
-    rows = []
-    checks = _check_rows(res)
-    for s in REF_STATIONS:
-        for dx in dxs:
-            key = f"{dx:g}"
-            c = res["stations"][s][key]
-            rows.append(
-                f"| {s} | {key} m | {c['sim']['rupture_time']:.3f} | {c['ref']['rupture_time']:.3f} | "
-                f"{c['diff']['rupture_time']:+.3f} ({_limit(checks, s, key, 'rupture_time')}) | "
-                f"{c['sim']['final_slip']:.3f} | {c['ref']['final_slip']:.3f} | "
-                f"{100 * c['rel']['final_slip']:+.1f} % ({_limit(checks, s, key, 'final_slip')}) | "
-                f"{c['sim']['peak_rate']:.3f} | {c['ref']['peak_rate']:.3f} | "
-                f"{100 * c['rel']['peak_rate']:+.1f} % ({_limit(checks, s, key, 'peak_rate')}) |")
-    return "\n".join(rows)
-
-
-def _fmt_extra_rows(res, dxs):
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            f, r, m = c["fine"], c["series_rms"], c["sim"]
-            rows.append(
-                f"| {s} | {dx:g} m | {f['rupture_time_interp']:.4f} | {c['ref']['rupture_time_interp']:.4f} | "
-                f"{m['peak_time']:.2f} ({c['diff']['peak_time']:+.2f}) | {c['ref']['peak_time']:.2f} | "
-                f"{f['peak_rate']:.3f} at {f['peak_time']:.3f} s | "
-                f"{m['final_stress']:.2f} ({c['diff']['final_stress']:+.2f}) | {c['ref']['final_stress']:.2f} | "
-                f"{100 * r['slip']:.1f} / {100 * r['rate']:.1f} / {100 * r['stress']:.1f} |")
-    return "\n".join(rows)
-
-
 def _fmt_runs(res, dxs):
     rows = []
     for dx in dxs:
@@ -410,37 +232,8 @@ def _fmt_symmetry(res, dxs):
     return "\n".join(rows)
 
 
-def _per_dx(acc):
-    """{dx: (checks holding, checks)} of a verdict, finest last."""
-    out = {}
-    for r in acc["checks"]:
-        ok, n = out.get(r["dx"], (0, 0))
-        out[r["dx"]] = (ok + r["pass"], n + 1)
-    return dict(sorted(out.items(), reverse=True))
-
-
 def verdict_lines(res, dxs):
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        return ("**Acceptance: not checked.** It applies at 100 m; this version has runs at "
-                f"{', '.join(f'{x:g} m' for x in dxs)} only.")
-    fine = [x for x in dxs if x < C.ACCEPT_DX]
-    per = _per_dx(acc)
-    status = "; ".join(f"{dx:g} m {'PASS' if ok == n else 'FAIL'} ({ok} of {n} checks hold)"
-                       for dx, (ok, n) in per.items())
-    head = (f"**Acceptance: {'PASS' if acc['pass'] else 'FAIL'}** ({status}). At {C.ACCEPT_DX:g} m, at both "
-            f"stations: rupture time within {C.TOL_RUPTURE_TIME:g} s, final slip within "
-            f"{100 * C.TOL_FINAL_SLIP:g} %, peak slip rate within {100 * C.TOL_PEAK_RATE:g} % of MDSBI")
-    if fine:
-        head += (f"; at {', '.join(f'{x:g} m' for x in fine)} each difference within the same limit and "
-                 f"no larger than at {C.ACCEPT_DX:g} m")
-    else:
-        head += f" (no run finer than {C.ACCEPT_DX:g} m in this version: the convergence part is not checked)"
-    if acc["failures"]:
-        head += ". These do not hold:\n\n" + "\n".join(f"* {f}" for f in acc["failures"])
-    else:
-        head += "."
-    return head
+    return H.verdict_lines(res, dxs, "both stations")
 
 
 def _variant_section(res):
@@ -487,7 +280,7 @@ def _describe(meta):
 def write_page(res, dxs, page, figrel, notes_path=None, command=None):
     """docs/tpv3.md from the results; the discussion (``discussion.md`` next to this
     script, {placeholders} filled from the results) follows the tables."""
-    cmd = command or "python studies/tpv3/run.py"
+    cmd = command or "python -m studies.tpv3.run"
     text = f"""# SCEC TPV3 against MDSBI
 
 *Written by `studies/tpv3/run.py` from its own output; this version by `{cmd}`.
@@ -528,7 +321,7 @@ it holds (at 50 m the limit is the smaller of the 100 m tolerance and the 100 m 
 
 | station | dx | rupture time (s) | MDSBI | difference (limit: holds) | final slip (m) | MDSBI | difference (limit: holds) | peak slip rate (m/s) | MDSBI | difference (limit: holds) |
 |---|---|---|---|---|---|---|---|---|---|---|
-{_fmt_station_rows(res, dxs)}
+{H.station_rows(res, REF_STATIONS, dxs)}
 
 The other measures (not part of the acceptance): the rupture time from the interpolated
 1 mm/s crossing on cracklab's own steps (the reference's crossing interpolated between
@@ -539,7 +332,7 @@ reference's peak of each):
 
 | station | dx | rupture time, interpolated (s) | MDSBI | time of peak (s) | MDSBI | peak on own steps (m/s) | final stress (MPa) | MDSBI | RMS difference (%) |
 |---|---|---|---|---|---|---|---|---|---|
-{_fmt_extra_rows(res, dxs)}
+{H.measure_rows(res, REF_STATIONS, dxs, own_peak=True)}
 
 Station positions and symmetry: each station's offset from the hypocentre (the node it
 is recorded on), the largest dip component of the slip rate there (zero by symmetry on
@@ -563,16 +356,10 @@ the two axes), and the largest difference between faultst000dp-030 and its mirro
 ![rupture time]({figrel}/tpv3_rupture_time.png)
 
 {_variant_section(res)}"""
-    notes = Path(notes_path or HERE / "discussion.md")
     if f"{C.ACCEPT_DX:g}" not in res["runs"]:
         text += f"*The discussion (`studies/tpv3/discussion.md`) needs the {C.ACCEPT_DX:g} m run.*\n"
-    elif notes.exists():
-        body = notes.read_text()
-        try:
-            body = body.format(**page_numbers(res, dxs))
-        except (KeyError, IndexError, ValueError) as exc:
-            raise ValueError(f"{notes}: placeholder {exc} not filled from the results") from exc
-        text += body
+    else:
+        text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 
@@ -656,7 +443,7 @@ def page_numbers(res, dxs):
     d["replicas"], d["timestep"] = _variant_sentences(res)
     d["scheme"] = _scheme_sentence(res)
     for s in REF_STATIONS:
-        d[f"lag_{s.replace('-', 'm')}_{key100}"] = f"{_lag(res['stations'][s][key100]):+.4f}"
+        d[f"lag_{s.replace('-', 'm')}_{key100}"] = f"{lag(res['stations'][s][key100]):+.4f}"
     return d
 
 
@@ -706,7 +493,7 @@ def _variant_sentences(res):
     return replicas, timestep
 
 
-def _lag(c):
+def lag(c):
     """cracklab's interpolated 1 mm/s crossing minus MDSBI's (s)."""
     return c["fine"]["rupture_time_interp"] - c["ref"]["rupture_time_interp"]
 
@@ -726,24 +513,16 @@ def _scheme_sentence(res):
     n = sum(1 for r in v["acceptance"]["checks"] if r["dx"] == C.ACCEPT_DX)
     return (f"With the first-order product scheme at beta = {meta['beta']:g} (`run.py --formulation product`; "
             f"table \"Time-step, scheme and cell checks\") the interpolated crossings lag MDSBI's by "
-            f"{_lag(cs[0]):+.4f} s and {_lag(cs[1]):+.4f} s, against {_lag(ms[0]):+.4f} s and {_lag(ms[1]):+.4f} s "
+            f"{lag(cs[0]):+.4f} s and {lag(cs[1]):+.4f} s, against {lag(ms[0]):+.4f} s and {lag(ms[1]):+.4f} s "
             f"with {main['formulation']} at beta = {main['beta']:g}; it "
             + (f"meets all {n} acceptance numbers at {key100} m." if not missed else
                f"misses {len(missed)} of the {n} acceptance numbers at {key100} m."))
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--out", default=str(ROOT / "out" / "tpv3"))
-    p.add_argument("--dx", type=float, nargs="+", default=None,
-                   help="grid spacings in m (default 100; '--dx 100 50' adds 50 m)")
-    p.add_argument("--t-end", type=float, default=12.0, help="simulated time of the runs (s)")
-    p.add_argument("--quick", action="store_true", help="600 m and 400 m, 6 s, into OUT/quick (acceptance not checked)")
-    p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
-    p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
-    p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv3.md)")
-    p.add_argument("--reference", default=None, help="directory of the MDSBI station files")
+    p = H.parser(__doc__, "tpv3", dx_help="grid spacings in m (default 100; '--dx 100 50' adds 50 m)",
+                 quick_help="600 m and 400 m, 6 s, into OUT/quick (acceptance not checked)",
+                 reference_help="directory of the MDSBI station files")
     p.add_argument("--formulation", default=FORMULATION, choices=(FORMULATION, "product", "displacement"),
                    help=f"time stepping (default {FORMULATION}: tpv3's own, second order in dt); 'product' "
                         "(first order: the law's slip path by the rectangle rule) or 'displacement' runs the "
@@ -754,7 +533,6 @@ def main(argv=None) -> int:
                    help="periodic cell in m instead of 48000 24000: a replica check into OUT/domain<L1>x<L3>km, no page")
     args = p.parse_args(argv)
 
-    out = Path(args.out)
     variant = None
     if args.formulation != FORMULATION:
         variant = args.formulation
@@ -764,16 +542,8 @@ def main(argv=None) -> int:
         variant = f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km"
     if sum(x is not None for x in (args.beta, args.domain)) + (args.formulation != FORMULATION) > 1:
         p.error("give one of --beta, --domain, --formulation product|displacement at a time")
-    if args.quick:
-        out = out / "quick"
-        dxs = args.dx or [600.0, 400.0]
-        t_end = 6.0
-    else:
-        dxs = args.dx or [C.ACCEPT_DX]
-        t_end = args.t_end
-        if any(x < C.ACCEPT_DX for x in dxs) and C.ACCEPT_DX not in dxs:
-            dxs = [C.ACCEPT_DX] + list(dxs)       # the 50 m check compares with the 100 m run
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=6.0, default=[C.ACCEPT_DX],
+                                 accept_dx=C.ACCEPT_DX)
     main_out = out
     if variant:
         out = out / variant
@@ -787,15 +557,13 @@ def main(argv=None) -> int:
     report(res, dxs)
     if variant:
         print(f"results in {out / 'tpv3_results.json'}; the main page shows this run when it is redrawn "
-              f"({'python studies/tpv3/run.py --report-only'} with the same --dx)")
+              f"(python -m studies.tpv3.run --report-only with the same --dx)")
         return exit_status(res)
     found = variants(main_out, dxs) if not args.quick else {}
     if found:
         res["variants"] = {name: analyse(main_out / name, done, args.reference) for name, done in found.items()}
         (out / "tpv3_results.json").write_text(json.dumps(res, indent=1))
-    figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv3.md" if args.quick else ROOT / "docs" / "tpv3.md"))
-    figdir.mkdir(parents=True, exist_ok=True)
+    figdir, page = H.page_paths(args, out, "tpv3", args.quick)
     cells = {}
     for name in found:
         if name.startswith("domain") and C.ACCEPT_DX in found[name]:
@@ -804,40 +572,17 @@ def main(argv=None) -> int:
                 load_run(main_out / name, C.ACCEPT_DX)[2]
     fig_stations(out, dxs, figdir, args.reference, cells)
     fig_rupture(out, dxs, figdir)
-    try:
-        figrel = Path(figdir).resolve().relative_to(Path(page).resolve().parent)
-    except ValueError:
-        figrel = Path(figdir).resolve()
-    argv_used = sys.argv[1:] if argv is None else list(argv)
-    write_page(res, dxs, page, figrel.as_posix(), command=" ".join(["python", "studies/tpv3/run.py"] + argv_used))
+    write_page(res, dxs, page, H.figure_link(figdir, page), command=H.command_line("studies.tpv3.run", argv))
     print(f"wrote {page}, figures in {figdir}, results in {out / 'tpv3_results.json'}")
     return exit_status(res)
 
 
 def report(res, dxs):
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            print(f"{s:17s} {dx:5g} m  rupture {c['sim']['rupture_time']:.3f} vs {c['ref']['rupture_time']:.3f} "
-                  f"({c['diff']['rupture_time']:+.3f} s)  final slip {c['sim']['final_slip']:.3f} vs "
-                  f"{c['ref']['final_slip']:.3f} ({100 * c['rel']['final_slip']:+.1f} %)  peak rate "
-                  f"{c['sim']['peak_rate']:.3f} vs {c['ref']['peak_rate']:.3f} ({100 * c['rel']['peak_rate']:+.1f} %)")
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        print(f"acceptance: NOT CHECKED (applies at {C.ACCEPT_DX:g} m)")
-        return
-    per = "; ".join(f"{dx:g} m {'PASS' if ok == n else 'FAIL'} ({ok} of {n} checks hold)"
-                    for dx, (ok, n) in _per_dx(acc).items())
-    print(f"acceptance: {'PASS' if acc['pass'] else 'FAIL'} ({per})")
-    for f in acc["failures"]:
-        print(f"  FAIL {f}")
+    H.report(res, REF_STATIONS, dxs)
 
 
 def exit_status(res) -> int:
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        return 0 if all(float(k) > C.ACCEPT_DX for k in res["runs"]) else 2
-    return 0 if acc["pass"] else 1
+    return H.exit_status(res)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """Comparison of cracklab TPV5 station series with the MDSBI reference (docs/tpv5.md).
 
-The series measures and the acceptance check are TPV3's (``studies/tpv3/compare.py``,
-loaded from there: one definition of rupture time, final slip, peak slip rate and of the
+The series measures and the acceptance check are TPV3's (``studies.benchmarks.measures``:
+one definition of rupture time, final slip, peak slip rate and of the
 acceptance for both studies); this module adds what TPV5 needs and TPV3 does not:
 
 * ``load_reference`` of ``shared/reference/tpv5_mdsbi`` (the same file format);
@@ -18,50 +18,27 @@ tests/studies/test_tpv5_study.py.
 """
 from __future__ import annotations
 
-import importlib.util
 import math
-from pathlib import Path
 
 import numpy as np
 
-_TPV3 = Path(__file__).resolve().parents[1] / "tpv3" / "compare.py"
-_spec = importlib.util.spec_from_file_location("_tpv3_compare_for_tpv5", _TPV3)
-_C3 = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_C3)
+from studies.benchmarks.harness import mdsbi_station, reference_dir
+from studies.benchmarks.measures import (  # noqa: F401 - TPV3's measures, under this study's name
+    ACCEPT_DX, COLUMNS, QUANTITY, THRESHOLD, TOL_FINAL_SLIP, TOL_PEAK_RATE, TOL_RUPTURE_TIME, TOLERANCES,
+    acceptance, check_acceptance, compare_station, differences, final_value, fmt_tol, metrics, peak, read_mdsbi,
+    resample, rupture_time, series_errors)
 
-THRESHOLD = _C3.THRESHOLD
-COLUMNS = _C3.COLUMNS
-TOL_RUPTURE_TIME = _C3.TOL_RUPTURE_TIME   # 0.05 s, issue 18 point 4: the same numbers as TPV3
-TOL_FINAL_SLIP = _C3.TOL_FINAL_SLIP       # 3 %
-TOL_PEAK_RATE = _C3.TOL_PEAK_RATE         # 15 %
-TOLERANCES = _C3.TOLERANCES
-ACCEPT_DX = _C3.ACCEPT_DX                 # 100 m
-QUANTITY = _C3.QUANTITY
-rupture_time = _C3.rupture_time
-peak = _C3.peak
-final_value = _C3.final_value
-resample = _C3.resample
-metrics = _C3.metrics
-compare_station = _C3.compare_station
-differences = _C3.differences
-acceptance = _C3.acceptance
-check_acceptance = _C3.check_acceptance
-series_errors = _C3.series_errors
-_fmt_tol = _C3._fmt_tol
+REFERENCE = "tpv5_mdsbi"
 
 
-def default_reference_dir() -> Path:
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        cand = parent / "shared" / "reference" / "tpv5_mdsbi"
-        if cand.is_dir():
-            return cand
-    return Path("/work/shared/reference/tpv5_mdsbi")
+def default_reference_dir():
+    """The reference's folder when no ``--reference`` is given (``harness.reference_dir``)."""
+    return reference_dir(REFERENCE)
 
 
 def load_reference(station: str, directory=None) -> dict:
     """The MDSBI series of one TPV5 station: dict of numpy arrays keyed by ``COLUMNS``."""
-    return _C3.load_reference(station, directory or default_reference_dir())
+    return mdsbi_station(REFERENCE, station, directory)
 
 
 def lag_fit(betas, lags, *, limit=TOL_RUPTURE_TIME, beta_now=None, order=1) -> dict:

@@ -1,13 +1,13 @@
 """SCEC TPV5 with cracklab against the independent spectral BI code MDSBI (docs/tpv5.md).
 
-    python studies/tpv5/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
-                               [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product]
+    python -m studies.tpv5.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
+                                [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product]
 
 Runs ``cracklab.scenes.tpv5`` (the free surface by mirror symmetry: the half plane below
 it) at each grid spacing (default 100 m; ``--dx 100 50`` adds 50 m), streams each run to
 OUT/tpv5_dx<dx>.zarr (station series every step, the rupture time of the half plane, the
 slip at the end) with its wall time in OUT/tpv5_dx<dx>.json, compares the reference's five
-stations (shared/reference/tpv5_mdsbi: faultst000dp000 on the surface, faultst000dp030,
+stations (shared/reference/tpv5_mdsbi, or ``--reference DIR``: faultst000dp000 on the surface, faultst000dp030,
 faultst000dp075 the hypocentre, faultst-075dp075 and faultst075dp075 the centres of the
 78 MPa and 62 MPa patches) and writes
 
@@ -38,21 +38,18 @@ beta) with the exponential history engine.
 """
 from __future__ import annotations
 
-import argparse
 import json
-import platform
-import shutil
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-sys.path.insert(0, str(HERE))
+from studies.benchmarks import harness as H
+from studies.tpv5 import compare as C
 
-import compare as C  # noqa: E402
+HERE = Path(__file__).resolve().parent
+ROOT = H.ROOT
 
 REF_STATIONS = ("faultst000dp000", "faultst000dp030", "faultst000dp075", "faultst-075dp075", "faultst075dp075")
 PRETTY = {"faultst000dp000": "faultst000dp000 (free surface above the hypocentre)",
@@ -71,70 +68,26 @@ SCATTER = 0.005           # s: the 1 mm/s crossing scatters by a few ms about it
 
 
 def numerics(formulation=None):
-    from cracklab.model.scene import Numerics
-
-    return Numerics(formulation=formulation or FORMULATION, engine=ENGINE, rupture_threshold=C.THRESHOLD)
+    return H.numerics(formulation or FORMULATION, ENGINE)
 
 
 def build_scene(dx, t_end, beta=None, domain=None, formulation=None):
     """``scenes.tpv5`` with its own stations, the rupture time of the half plane and the
     slip along strike at the end."""
-    from cracklab.model.record import Record
     from cracklab.scenes import tpv5
 
-    extra = {} if domain is None else {"domain": tuple(float(x) for x in domain)}
-    base = tpv5(dx=dx, t_end=t_end, beta=beta, numerics=numerics(formulation), **extra)
-    rec = Record(fields=("delta_1",), times=(base.nsteps * base.dt,), stations=dict(base.record.stations))
-    return base.replace(record=rec)
+    return H.build(tpv5, dx, t_end=t_end, domain=domain, beta=beta, numerics=numerics(formulation))
 
 
 def store_path(out, dx):
-    return Path(out) / f"tpv5_dx{dx:g}.zarr"
-
-
-def _complete(store, scene):
-    """The store holds a finished run of this very scene."""
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of
-
-    if not Path(store).exists() or not Path(store).with_suffix(".json").exists():
-        return False
-    try:
-        ds = xr.open_zarr(store, consolidated=False)
-        return "rupture_time" in ds and scene_of(ds).to_toml() == scene.to_toml()
-    except Exception:  # noqa: BLE001 - any unreadable store is rerun
-        return False
+    return H.store_path(out, f"tpv5_dx{dx:g}")
 
 
 def run_one(dx, t_end, out, force=False, log=print, beta=None, domain=None, formulation=None):
     """Run (or reuse) one grid spacing; return its metadata dict."""
-    import cracklab
-    from cracklab.output.simulate import simulate
-
     scene = build_scene(dx, t_end, beta, domain, formulation)
-    store = store_path(out, dx)
-    meta_path = store.with_suffix(".json")
-    if not force and _complete(store, scene):
-        meta = json.loads(meta_path.read_text())
-        log(f"dx = {dx:g} m: reusing {store} (ran in {meta['wall_s']:.0f} s)")
-        return meta
-    if store.exists():
-        shutil.rmtree(store)
-    meta_path.unlink(missing_ok=True)
-    g = scene.grid
-    log(f"dx = {dx:g} m: half plane {g.shape[0]} x {g.shape[1]}, beta = {scene.beta:.4f}, dt = {scene.dt:.3e} s, "
-        f"{scene.nsteps} steps to t = {t_end:g} s -> {store}", flush=True)
-    t0 = time.time()
-    simulate(scene, store=str(store), progress=False)
-    wall = time.time() - t0
-    meta = {"dx": dx, "t_end": scene.nsteps * scene.dt, "n1": g.n1, "n3": g.n3, "shape": list(g.shape),
-            "beta": scene.beta, "dt": scene.dt, "nsteps": scene.nsteps, "wall_s": wall, "domain": [g.L1, g.L3],
-            "s_per_step": wall / scene.nsteps, "formulation": scene.formulation, "engine": scene.numerics.engine,
-            "cracklab_version": cracklab.__version__, "host": platform.node()}
-    meta_path.write_text(json.dumps(meta, indent=1))
-    log(f"dx = {dx:g} m: done in {wall:.0f} s ({1e3 * wall / scene.nsteps:.1f} ms/step)", flush=True)
-    return meta
+    return H.run_scene(scene, store_path(out, dx), label=f"dx = {dx:g} m",
+                       meta={"dx": dx, "shape": list(scene.grid.shape)}, force=force, log=log)
 
 
 def step_cost(out, betas, dx=C.ACCEPT_DX, steps=300, rounds=3, log=print):
@@ -171,24 +124,11 @@ def step_cost(out, betas, dx=C.ACCEPT_DX, steps=300, rounds=3, log=print):
 
 # ------------------------------------------------------------------------------ analysis
 def load_run(out, dx):
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of, stations
-
-    ds = xr.open_zarr(store_path(out, dx), consolidated=False)
-    return ds, scene_of(ds), stations(ds).load()
+    return H.load_run(store_path(out, dx))
 
 
-def sim_series(st, station):
-    """cracklab's strike components at one station (stress in MPa, as the reference)."""
-    s = st.sel(station=station)
-    return {"t": st.t.values, "slip": s.delta_1.values, "rate": s.v_1.values,
-            "stress": s.tau_1.values / 1e6, "rate3": s.v_3.values}
-
-
-def ref_series(ref):
-    """The reference's strike (h) components under the names of ``sim_series``."""
-    return {"t": ref["t"], "slip": ref["h_slip"], "rate": ref["h_rate"], "stress": ref["h_stress"]}
+sim_series = H.strike_series
+ref_series = H.reference_series
 
 
 def compare_run(st, refs):
@@ -198,12 +138,7 @@ def compare_run(st, refs):
     out = {}
     xc = float(st.x1.sel(station="faultst000dp075"))
     for s in REF_STATIONS:
-        sim = sim_series(st, s)
-        ref = ref_series(refs[s])
-        cmp = C.compare_station(sim, ref)
-        cmp["accept"] = C.acceptance(cmp)
-        cmp["series_rms"] = C.series_errors(sim, ref)
-        cmp["max_abs_v3"] = float(np.max(np.abs(sim["rate3"])))
+        cmp, sim, ref = H.compare_strike(st, s, refs[s])
         cmp["ref_max_abs_v3"] = float(np.max(np.abs(refs[s]["v_rate"])))
         cmp["position_km"] = [(float(st.x1.sel(station=s)) - xc) / 1e3, float(st.x3.sel(station=s)) / 1e3]
         if s == SURFACE:
@@ -213,20 +148,9 @@ def compare_run(st, refs):
 
 
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = json.loads(store_path(out, dx).with_suffix(".json").read_text())
-        ds, scene, st = load_run(out, dx)
-        res["runs"][key] = meta
-        for s, cmp in compare_run(st, refs).items():
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt))
-        meta["surface_rupture_time"] = float(np.nanmax(rt[:, 0][fault[:, 0]]))
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs),
+                         lambda st, rt, fault: {"surface_rupture_time": float(np.nanmax(rt[:, 0][fault[:, 0]]))})
     res["acceptance"] = C.check_acceptance(res["stations"])
     return res
 
@@ -288,38 +212,15 @@ def add_variants(res, main_out, ref_dir=None):
 COLOURS = {"100": "tab:red", "50": "tab:blue", "600": "tab:orange", "400": "tab:green", "200": "tab:purple"}
 
 
-def _plt():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def fig_stations(out, dxs, figdir, ref_dir=None):
-    plt = _plt()
+    plt = H.pyplot()
     paths = []
     runs = {f"{dx:g}": load_run(out, dx)[2] for dx in dxs}
     for s in REF_STATIONS:
         ref = C.load_reference(s, ref_dir)
-        fig, axes = plt.subplots(3, 1, figsize=(7.5, 8.5), sharex=True)
-        for ax, key, rkey, label in zip(axes, ("slip", "rate", "stress"), ("h_slip", "h_rate", "h_stress"),
-                                        ("slip (m)", "slip rate (m/s)", "shear stress (MPa)")):
-            ax.plot(ref["t"], ref[rkey], color="k", lw=2.2, alpha=0.55, label="MDSBI, 100 m")
-            for name, st in runs.items():
-                sim = sim_series(st, s)
-                ax.plot(sim["t"], sim[key], color=COLOURS.get(name), lw=1.0, label=f"cracklab, {name} m")
-            ax.set_ylabel(label)
-            ax.grid(alpha=0.3)
-        axes[0].legend(loc="upper left", fontsize=8)
-        axes[-1].set_xlabel("time (s)")
-        axes[0].set_title(f"TPV5, {PRETTY[s]}: strike component", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"tpv5_{s}.png"
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
+        fig = H.station_figure(ref, runs, lambda st: sim_series(st, s), f"TPV5, {PRETTY[s]}: strike component",
+                               ref_keys=("h_slip", "h_rate", "h_stress"), ref_label="MDSBI, 100 m", colours=COLOURS)
+        paths.append(H.save(fig, Path(figdir) / f"tpv5_{s}.png", 100))
     # the rupture fronts: slip rate around the reference's rupture time, one panel per station
     fig, axes = plt.subplots(len(REF_STATIONS), 1, figsize=(7.5, 2.3 * len(REF_STATIONS)))
     for ax, s in zip(axes, REF_STATIONS):
@@ -336,11 +237,7 @@ def fig_stations(out, dxs, figdir, ref_dir=None):
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("time (s)")
-    fig.tight_layout()
-    p = Path(figdir) / "tpv5_fronts.png"
-    fig.savefig(p, dpi=100)
-    plt.close(fig)
-    paths.append(p)
+    paths.append(H.save(fig, Path(figdir) / "tpv5_fronts.png", 100))
     return paths
 
 
@@ -363,7 +260,7 @@ def _decorate(ax, plt):
 def fig_rupture(out, dxs, figdir):
     """cracklab's rupture-time contours on the half plane (the reference has no contour
     file for TPV5), and the difference of the two finest runs."""
-    plt = _plt()
+    plt = H.pyplot()
     two = len(dxs) >= 2
     fig, axes = plt.subplots(2 if two else 1, 1, figsize=(9, 9.6 if two else 5.0), squeeze=False)
     axes = axes[:, 0]
@@ -399,86 +296,12 @@ def fig_rupture(out, dxs, figdir):
         fig.colorbar(im, ax=ax, shrink=0.7, label="s")
         _decorate(ax, plt)
         ax.set_title(f"rupture time at {a:g} m minus at {b:g} m", fontsize=9)
-    fig.tight_layout()
-    p = Path(figdir) / "tpv5_rupture_time.png"
-    fig.savefig(p, dpi=100)
-    plt.close(fig)
-    return [p]
+    return [H.save(fig, Path(figdir) / "tpv5_rupture_time.png", 100)]
 
 
 # ------------------------------------------------------------------------------ page
-def _ok(b):
-    return "yes" if b else "**no**"
-
-
-def _per_dx(acc):
-    out = {}
-    for r in acc["checks"]:
-        ok, n = out.get(r["dx"], (0, 0))
-        out[r["dx"]] = (ok + r["pass"], n + 1)
-    return dict(sorted(out.items(), reverse=True))
-
-
 def verdict_lines(res, dxs):
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        return ("**Acceptance: not checked.** It applies at 100 m; this version has runs at "
-                f"{', '.join(f'{x:g} m' for x in dxs)} only.")
-    fine = [x for x in dxs if x < C.ACCEPT_DX]
-    status = "; ".join(f"{dx:g} m {'PASS' if ok == n else 'FAIL'} ({ok} of {n} checks hold)"
-                       for dx, (ok, n) in _per_dx(acc).items())
-    head = (f"**Acceptance: {'PASS' if acc['pass'] else 'FAIL'}** ({status}). At {C.ACCEPT_DX:g} m, at the "
-            f"five stations: rupture time within {C.TOL_RUPTURE_TIME:g} s, final slip within "
-            f"{100 * C.TOL_FINAL_SLIP:g} %, peak slip rate within {100 * C.TOL_PEAK_RATE:g} % of MDSBI")
-    if fine:
-        head += (f"; at {', '.join(f'{x:g} m' for x in fine)} each difference within the same limit and "
-                 f"no larger than at {C.ACCEPT_DX:g} m")
-    else:
-        head += f" (no run finer than {C.ACCEPT_DX:g} m in this version: the convergence part is not checked)"
-    if acc["failures"]:
-        head += ". These do not hold:\n\n" + "\n".join(f"* {f}" for f in acc["failures"])
-    else:
-        head += "."
-    return head
-
-
-def _check_rows(res):
-    return {(r["station"], f"{r['dx']:g}", r["quantity"]): r for r in res["acceptance"]["checks"]}
-
-
-def _limit(rows, s, key, q):
-    r = rows.get((s, key, q))
-    return "not checked" if r is None else f"{C._fmt_tol(q, r['limit'])}: {_ok(r['pass'])}"
-
-
-def _fmt_station_rows(res, dxs):
-    rows, checks = [], _check_rows(res)
-    for s in REF_STATIONS:
-        for dx in dxs:
-            key = f"{dx:g}"
-            c = res["stations"][s][key]
-            rows.append(
-                f"| {s} | {key} m | {c['sim']['rupture_time']:.3f} | {c['ref']['rupture_time']:.3f} | "
-                f"{c['diff']['rupture_time']:+.3f} ({_limit(checks, s, key, 'rupture_time')}) | "
-                f"{c['sim']['final_slip']:.3f} | {c['ref']['final_slip']:.3f} | "
-                f"{100 * c['rel']['final_slip']:+.1f} % ({_limit(checks, s, key, 'final_slip')}) | "
-                f"{c['sim']['peak_rate']:.3f} | {c['ref']['peak_rate']:.3f} | "
-                f"{100 * c['rel']['peak_rate']:+.1f} % ({_limit(checks, s, key, 'peak_rate')}) |")
-    return "\n".join(rows)
-
-
-def _fmt_extra_rows(res, dxs):
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            f, r, m = c["fine"], c["series_rms"], c["sim"]
-            rows.append(
-                f"| {s} | {dx:g} m | {f['rupture_time_interp']:.4f} | {c['ref']['rupture_time_interp']:.4f} | "
-                f"{m['peak_time']:.2f} ({c['diff']['peak_time']:+.2f}) | {c['ref']['peak_time']:.2f} | "
-                f"{m['final_stress']:.2f} ({c['diff']['final_stress']:+.2f}) | {c['ref']['final_stress']:.2f} | "
-                f"{100 * r['slip']:.1f} / {100 * r['rate']:.1f} / {100 * r['stress']:.1f} |")
-    return "\n".join(rows)
+    return H.verdict_lines(res, dxs, "the five stations")
 
 
 def _fmt_runs(res, dxs):
@@ -511,7 +334,7 @@ def _describe(meta):
     return f"{meta['formulation']}, beta {meta['beta']:.4f}, {L1 / 1e3:g} km x {L3 / 1e3:g} km"
 
 
-def _variant_section(res):
+def variant_section(res):
     if not res.get("variants"):
         return ""
     rows = []
@@ -589,7 +412,7 @@ fitted lag is within {C.TOL_RUPTURE_TIME:g} s:
 
 
 def _main_command(dxs):
-    return "python studies/tpv5/run.py --dx " + " ".join(f"{x:g}" for x in dxs)
+    return "python -m studies.tpv5.run --dx " + " ".join(f"{x:g}" for x in dxs)
 
 
 def _check_commands(res):
@@ -610,7 +433,7 @@ def _check_commands(res):
 def write_page(res, dxs, page, figrel, notes_path=None, command=None):
     """docs/tpv5.md from the results; the discussion (``discussion.md`` next to this
     script, {placeholders} filled from the results) follows the tables."""
-    cmd = command or "python studies/tpv5/run.py"
+    cmd = command or "python -m studies.tpv5.run"
     L1, L3 = res["runs"][f"{dxs[0]:g}"]["domain"]
     figs = "\n\n".join(f"![{s}]({figrel}/tpv5_{s}.png)" for s in REF_STATIONS)
     text = f"""# SCEC TPV5 against MDSBI
@@ -657,7 +480,7 @@ holds (at 50 m the limit is the smaller of the 100 m tolerance and the 100 m dif
 
 | station | dx | rupture time (s) | MDSBI | difference (limit: holds) | final slip (m) | MDSBI | difference (limit: holds) | peak slip rate (m/s) | MDSBI | difference (limit: holds) |
 |---|---|---|---|---|---|---|---|---|---|---|
-{_fmt_station_rows(res, dxs)}
+{H.station_rows(res, REF_STATIONS, dxs)}
 
 The other measures (not part of the acceptance): the rupture time from the interpolated
 1 mm/s crossing on cracklab's own steps (the reference's crossing interpolated between its
@@ -667,7 +490,7 @@ slip rate / stress change, in % of the reference's peak of each):
 
 | station | dx | rupture time, interpolated (s) | MDSBI | time of peak (s) | MDSBI | final stress (MPa) | MDSBI | RMS difference (%) |
 |---|---|---|---|---|---|---|---|---|
-{_fmt_extra_rows(res, dxs)}
+{H.measure_rows(res, REF_STATIONS, dxs)}
 
 Station positions: the node each station is recorded on (strike from the hypocentre,
 depth), and the largest dip component of the slip rate there, cracklab's and MDSBI's. On
@@ -694,17 +517,11 @@ marked):
 
 ![rupture time]({figrel}/tpv5_rupture_time.png)
 
-{_variant_section(res)}"""
-    notes = Path(notes_path or HERE / "discussion.md")
+{variant_section(res)}"""
     if f"{C.ACCEPT_DX:g}" not in res["runs"]:
         text += f"*The discussion (`studies/tpv5/discussion.md`) needs the {C.ACCEPT_DX:g} m run.*\n"
-    elif notes.exists():
-        body = notes.read_text()
-        try:
-            body = body.format(**page_numbers(res, dxs))
-        except (KeyError, IndexError, ValueError) as exc:
-            raise ValueError(f"{notes}: placeholder {exc} not filled from the results") from exc
-        text += body
+    else:
+        text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 
@@ -801,7 +618,7 @@ def page_numbers(res, dxs):
                        if max(abs(x) for x in big) < 0.5 * max(abs(x) for x in main) else
                        ": the replicas do not explain it."))
     d["cell"], d["timestep"] = _variant_sentences(res)
-    d["scheme"] = _scheme_sentence(res)
+    d["scheme"] = scheme_sentence(res)
     return d
 
 
@@ -888,12 +705,12 @@ def _variant_sentences(res):
     return cell, timestep
 
 
-def _lag(c):
+def lag(c):
     """cracklab's interpolated 1 mm/s crossing minus MDSBI's (s)."""
     return c["fine"]["rupture_time_interp"] - c["ref"]["rupture_time_interp"]
 
 
-def _scheme_sentence(res):
+def scheme_sentence(res):
     """What the first-order product scheme (the checks OUT/product*) gives at 100 m next to
     the main runs' scheme (a sentence for discussion.md)."""
     key100 = f"{C.ACCEPT_DX:g}"
@@ -902,11 +719,11 @@ def _scheme_sentence(res):
     if not checks:
         return ("The first-order product scheme (`run.py --formulation product [--beta B]`) is not in this version "
                 "of the page.")
-    worst_main = max(_lag(res["stations"][s][key100]) for s in REF_STATIONS)
+    worst_main = max(lag(res["stations"][s][key100]) for s in REF_STATIONS)
     parts = []
     for _, v in sorted(checks, key=lambda nv: -nv[1]["runs"][key100]["beta"]):
         meta = v["runs"][key100]
-        lags = [_lag(v["stations"][s][key100]) for s in REF_STATIONS]
+        lags = [lag(v["stations"][s][key100]) for s in REF_STATIONS]
         missed = [f for f in v["acceptance"]["failures"] if f" at {key100} m" in f.split(":")[0]]
         n = sum(1 for r in v["acceptance"]["checks"] if r["dx"] == C.ACCEPT_DX)
         parts.append(f"at beta = {meta['beta']:g} ({meta['nsteps']} steps) the interpolated crossings lag by up "
@@ -919,43 +736,17 @@ def _scheme_sentence(res):
 
 
 def report(res, dxs):
-    for s in REF_STATIONS:
-        for dx in dxs:
-            c = res["stations"][s][f"{dx:g}"]
-            print(f"{s:17s} {dx:5g} m  rupture {c['sim']['rupture_time']:.3f} vs {c['ref']['rupture_time']:.3f} "
-                  f"({c['diff']['rupture_time']:+.3f} s)  final slip {c['sim']['final_slip']:.3f} vs "
-                  f"{c['ref']['final_slip']:.3f} ({100 * c['rel']['final_slip']:+.1f} %)  peak rate "
-                  f"{c['sim']['peak_rate']:.3f} vs {c['ref']['peak_rate']:.3f} ({100 * c['rel']['peak_rate']:+.1f} %)")
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        print(f"acceptance: NOT CHECKED (applies at {C.ACCEPT_DX:g} m)")
-        return
-    per = "; ".join(f"{dx:g} m {'PASS' if ok == n else 'FAIL'} ({ok} of {n} checks hold)"
-                    for dx, (ok, n) in _per_dx(acc).items())
-    print(f"acceptance: {'PASS' if acc['pass'] else 'FAIL'} ({per})")
-    for f in acc["failures"]:
-        print(f"  FAIL {f}")
+    H.report(res, REF_STATIONS, dxs)
 
 
 def exit_status(res) -> int:
-    acc = res["acceptance"]
-    if not acc["checked"]:
-        return 0 if all(float(k) > C.ACCEPT_DX for k in res["runs"]) else 2
-    return 0 if acc["pass"] else 1
+    return H.exit_status(res)
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--out", default=str(ROOT / "out" / "tpv5"))
-    p.add_argument("--dx", type=float, nargs="+", default=None,
-                   help="grid spacings in m (default 100; '--dx 100 50' adds 50 m)")
-    p.add_argument("--t-end", type=float, default=12.0, help="simulated time of the runs (s)")
-    p.add_argument("--quick", action="store_true", help="600 m and 400 m, 6 s, into OUT/quick (no acceptance)")
-    p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
-    p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
-    p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv5.md)")
-    p.add_argument("--reference", default=None, help="directory of the MDSBI station files")
+    p = H.parser(__doc__, "tpv5", dx_help="grid spacings in m (default 100; '--dx 100 50' adds 50 m)",
+                 quick_help="600 m and 400 m, 6 s, into OUT/quick (no acceptance)",
+                 reference_help="directory of the MDSBI station files")
     p.add_argument("--beta", type=float, default=None,
                    help="time-step factor instead of the builder's: a check into OUT/beta<B>, no page")
     p.add_argument("--domain", type=float, nargs=2, default=None, metavar=("L1", "L3"),
@@ -974,19 +765,12 @@ def main(argv=None) -> int:
         return 0
     if args.beta is not None and args.domain is not None:
         p.error("give one of --beta, --domain at a time")
-    out = Path(args.out)
     variant = (f"beta{args.beta:g}" if args.beta is not None else
                f"domain{args.domain[0] / 1e3:g}x{args.domain[1] / 1e3:g}km" if args.domain is not None else None)
     if args.formulation:
         variant = args.formulation + (f"_{variant}" if variant else "")
-    if args.quick:
-        out = out / "quick"
-        dxs, t_end = args.dx or [600.0, 400.0], 6.0
-    else:
-        dxs, t_end = args.dx or [C.ACCEPT_DX], args.t_end
-        if any(x < C.ACCEPT_DX for x in dxs) and C.ACCEPT_DX not in dxs and not variant:
-            dxs = [C.ACCEPT_DX] + list(dxs)       # the 50 m check compares with the 100 m run
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[600.0, 400.0], quick_t_end=6.0, default=[C.ACCEPT_DX],
+                                 accept_dx=None if variant else C.ACCEPT_DX)
     main_out = out
     out.mkdir(parents=True, exist_ok=True)
     if variant:
@@ -999,7 +783,7 @@ def main(argv=None) -> int:
         (main_out / variant / "tpv5_results.json").write_text(json.dumps(res, indent=1))
         report(res, dxs)
         print(f"results in {main_out / variant / 'tpv5_results.json'}; the main page shows this check when it is "
-              f"redrawn (python studies/tpv5/run.py --report-only with the page's --dx)")
+              f"redrawn (python -m studies.tpv5.run --report-only with the page's --dx)")
         return exit_status(res)
     if not args.report_only:
         for dx in dxs:
@@ -1009,17 +793,10 @@ def main(argv=None) -> int:
     if not args.quick:
         add_variants(res, main_out, args.reference)
     (out / "tpv5_results.json").write_text(json.dumps(res, indent=1))
-    figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv5.md" if args.quick else ROOT / "docs" / "tpv5.md"))
-    figdir.mkdir(parents=True, exist_ok=True)
+    figdir, page = H.page_paths(args, out, "tpv5", args.quick)
     fig_stations(out, dxs, figdir, args.reference)
     fig_rupture(out, dxs, figdir)
-    try:
-        figrel = Path(figdir).resolve().relative_to(Path(page).resolve().parent)
-    except ValueError:
-        figrel = Path(figdir).resolve()
-    argv_used = sys.argv[1:] if argv is None else list(argv)
-    write_page(res, dxs, page, figrel.as_posix(), command=" ".join(["python", "studies/tpv5/run.py"] + argv_used))
+    write_page(res, dxs, page, H.figure_link(figdir, page), command=H.command_line("studies.tpv5.run", argv))
     print(f"wrote {page}, figures in {figdir}, results in {out / 'tpv5_results.json'}")
     return exit_status(res)
 

@@ -2,7 +2,7 @@
 
 Plain functions on 1-D numpy arrays, checked on synthetic series with known answers
 (tests/studies/test_tpv6_study.py). The series measures (rupture time, peak, final value,
-resampling) are TPV3's (studies/tpv3/compare.py); TPV6 adds
+resampling) are TPV3's (studies.benchmarks.measures); TPV6 adds
 
 * ``load_reference``: one station's two files (far and near side) as the slip, slip rate,
   normal stress and each side's face motion;
@@ -22,22 +22,12 @@ farstSSSdpDDD.txt (the compliant far side: cracklab's top, x2 > 0) and nearstSSS
 """
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 
-
-def _tpv3_compare():
-    path = Path(__file__).resolve().parents[1] / "tpv3" / "compare.py"
-    spec = importlib.util.spec_from_file_location("tpv3_compare_for_tpv6", path)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-_T3 = _tpv3_compare()
-rupture_time, peak, final_value, resample = _T3.rupture_time, _T3.peak, _T3.final_value, _T3.resample
+from studies.benchmarks.harness import reference_dir
+from studies.benchmarks.measures import final_value, peak, resample, rupture_time  # noqa: F401 - named here too
 
 THRESHOLD = 1e-3          # m/s: rupture = first time the slip rate exceeds 1 mm/s
 COLUMNS = ("t", "h_disp", "h_vel", "h_stress", "v_disp", "v_vel", "v_stress", "n_disp", "n_vel", "n_stress")
@@ -56,13 +46,12 @@ RIPPLE_WINDOW = 0.25      # s: the running mean that ``ripple`` removes
 RIPPLE_DELAY = 0.3        # s: the ripple is measured from this long after the reference's rupture time
 
 
+REFERENCE = "tpv6_mdsbi"
+
+
 def default_reference_dir() -> Path:
-    here = Path(__file__).resolve()
-    for parent in here.parents:
-        cand = parent / "shared" / "reference" / "tpv6_mdsbi"
-        if cand.is_dir():
-            return cand
-    return Path("/work/shared/reference/tpv6_mdsbi")
+    """The reference's folder when no ``--reference`` is given (``harness.reference_dir``)."""
+    return reference_dir(REFERENCE)
 
 
 def reference_file(station: str, side: str, directory=None) -> Path:
@@ -71,7 +60,7 @@ def reference_file(station: str, side: str, directory=None) -> Path:
         raise ValueError(f"side must be one of {SIDES}, got {side!r}")
     if not station.startswith("faultst"):
         raise ValueError(f"station must be named faultstSSSdpDDD, got {station!r}")
-    return Path(directory or default_reference_dir()) / f"{side}{station[len('fault'):]}.txt"
+    return reference_dir(REFERENCE, directory) / f"{side}{station[len('fault'):]}.txt"
 
 
 def _read(path) -> dict:

@@ -1,12 +1,12 @@
 """SCEC TPV6 (a bimaterial fault under a free surface) with cracklab against MDSBI (docs/tpv6.md).
 
-    python studies/tpv6/run.py [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
+    python -m studies.tpv6.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
 
 Runs ``cracklab.scenes.tpv6`` at each grid spacing (default 100 m), streams each run to
 OUT/tpv6_dx<dx>.zarr (station series every step, each side's face motion among them; the
 rupture time of the whole fault; the final slip, opening, normal traction and face
 displacements) with its wall time in OUT/tpv6_dx<dx>.json, compares the reference's five
-stations (shared/reference/tpv6_mdsbi) and writes
+stations (shared/reference/tpv6_mdsbi, or ``--reference DIR``) and writes
 
 * OUT/tpv6_results.json         every number of the page, and the acceptance verdict,
 * docs/figures/tpv6_*.png       station series against MDSBI, rupture-time contours,
@@ -29,35 +29,18 @@ the exponential history engine.
 """
 from __future__ import annotations
 
-import argparse
 import json
-import platform
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
+from studies.benchmarks import harness as H
+from studies.tpv6 import compare as C
+from studies.tpv6.scene import ENGINE, FORMULATION, build_scene
+
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-
-
-def _own(name):
-    """This study's module ``name`` (compare, scene) by its path: another study's module of
-    the same name (studies/tpv3/compare.py) may already be imported."""
-    import importlib.util
-
-    key = f"tpv6_study_{name}"
-    if key not in sys.modules:
-        spec = importlib.util.spec_from_file_location(key, HERE / f"{name}.py")
-        mod = importlib.util.module_from_spec(spec)
-        sys.modules[key] = mod
-        spec.loader.exec_module(mod)
-    return sys.modules[key]
-
-
-C = _own("compare")
-ENGINE, FORMULATION, build_scene = _own("scene").ENGINE, _own("scene").FORMULATION, _own("scene").build_scene
+ROOT = H.ROOT
 
 REF_STATIONS = ("faultst000dp000", "faultst-120dp000", "faultst120dp000", "faultst-120dp075", "faultst120dp075")
 PRETTY = {"faultst000dp000": "faultst000dp000 (surface, above the hypocentre)",
@@ -69,82 +52,24 @@ OFFSET_KM = {s: (int(s[7:-5]) / 10.0, int(s[-3:]) / 10.0) for s in REF_STATIONS}
 
 
 def store_path(out, dx):
-    return Path(out) / f"tpv6_dx{dx:g}.zarr"
-
-
-def _complete(store, scene):
-    """The store holds a finished (or solver-stopped) run of this very scene."""
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of
-
-    meta = Path(store).with_suffix(".json")
-    if not Path(store).exists() or not meta.exists():
-        return False
-    try:
-        ds = xr.open_zarr(store, consolidated=False)
-        return "rupture_time" in ds and scene_of(ds).to_toml() == scene.to_toml()
-    except Exception:
-        return False
+    return H.store_path(out, f"tpv6_dx{dx:g}")
 
 
 def run_one(dx, t_end, out, force=False, log=print, normal=None):
     """Run (or reuse) one grid spacing; return its metadata dict ("error": the solver's
-    message when it stopped the run). ``normal``: the law's regularised normal stress
-    (scene.build_scene)."""
+    message when it stopped the run; "setup_s": the history engines' exact taps, timed
+    apart). ``normal``: the law's regularised normal stress (scene.build_scene)."""
     from cracklab.errors import SimulationError
-    from cracklab.output.simulate import simulate
 
     scene = build_scene(dx, t_end, normal=normal)
-    store = store_path(out, dx)
-    meta_path = store.with_suffix(".json")
-    if not force and _complete(store, scene):
-        meta = json.loads(meta_path.read_text())
-        log(f"dx = {dx:g} m: reusing {store} (ran in {meta['wall_s']:.0f} s)")
-        return meta
-    if store.exists():
-        import shutil
-
-        shutil.rmtree(store)
-    meta_path.unlink(missing_ok=True)
-    g = scene.grid
-    log(f"dx = {dx:g} m: grid {g.shape[0]} x {g.shape[1]} (half plane), beta = {scene.beta:.4f}, "
-        f"dt = {scene.dt:.3e} s, {scene.nsteps} steps to t = {t_end:g} s -> {store}")
-    # the history engines' exact taps first, timed apart (they are memoised in the process:
-    # the run's own interface then reuses them): setup and stepping costs separately
-    from cracklab.solver.interfaces import for_scene
-
-    t0 = time.time()
-    for_scene(scene)
-    setup = time.time() - t0
-    log(f"dx = {dx:g} m: interface set up in {setup:.0f} s")
-    error = None
-    try:
-        simulate(scene, store=str(store), progress=False)
-    except SimulationError as exc:
-        error = str(exc)
-        log(f"dx = {dx:g} m: the solver stopped the run: {error}")
-    wall = time.time() - t0
-    import cracklab
-
-    meta = {"dx": dx, "t_end": scene.nsteps * scene.dt, "n1": g.n1, "n3": g.n3, "shape": list(g.shape),
-            "beta": scene.beta, "dt": scene.dt, "nsteps": scene.nsteps, "wall_s": wall, "setup_s": setup,
-            "s_per_step": (wall - setup) / scene.nsteps, "domain": [g.L1, g.L3], "formulation": scene.formulation,
-            "engine": scene.numerics.engine, "cracklab_version": cracklab.__version__, "host": platform.node(),
-            "error": error, "normal": normal or {}}
-    meta_path.write_text(json.dumps(meta, indent=1))
-    log(f"dx = {dx:g} m: {'stopped' if error else 'done'} after {wall:.0f} s")
-    return meta
+    return H.run_scene(scene, store_path(out, dx), label=f"dx = {dx:g} m",
+                       meta={"dx": dx, "shape": list(scene.grid.shape), "normal": normal or {}}, force=force,
+                       log=log, time_setup=True, tolerate=(SimulationError,))
 
 
 # ------------------------------------------------------------------------------ analysis
 def load_run(out, dx):
-    import xarray as xr
-
-    from cracklab.output.simulate import scene_of, stations
-
-    ds = xr.open_zarr(store_path(out, dx), consolidated=False)
-    return ds, scene_of(ds), stations(ds).load()
+    return H.load_run(store_path(out, dx))
 
 
 def sim_series(st, station):
@@ -164,26 +89,24 @@ def station_extras(sim) -> dict:
             "final_dip": [float(sim["far_dip"][-1]), float(sim["near_dip"][-1])]}
 
 
+def compare_run(st, refs):
+    """Every reference station of one run: compare.compare_station, the run's own checks
+    (station_extras) and the reference's final dip and normal displacements."""
+    out = {}
+    for s in REF_STATIONS:
+        sim = sim_series(st, s)
+        cmp = C.compare_station(sim, refs[s])
+        cmp["own"] = station_extras(sim)
+        cmp["ref_final_dip"] = [float(refs[s]["far"]["v_disp"][-1]), float(refs[s]["near"]["v_disp"][-1])]
+        cmp["ref_final_normal_disp"] = float(refs[s]["far"]["n_disp"][-1])
+        out[s] = cmp
+    return out
+
+
 def analyse(out, dxs, ref_dir=None):
-    res = {"runs": {}, "stations": {}}
     refs = {s: C.load_reference(s, ref_dir) for s in REF_STATIONS}
-    for dx in dxs:
-        key = f"{dx:g}"
-        meta = json.loads(store_path(out, dx).with_suffix(".json").read_text())
-        ds, scene, st = load_run(out, dx)
-        meta["t_reached"] = float(st.t.values[-1])
-        res["runs"][key] = meta
-        for s in REF_STATIONS:
-            sim = sim_series(st, s)
-            cmp = C.compare_station(sim, refs[s])
-            cmp["own"] = station_extras(sim)
-            cmp["ref_final_dip"] = [float(refs[s]["far"]["v_disp"][-1]), float(refs[s]["near"]["v_disp"][-1])]
-            cmp["ref_final_normal_disp"] = float(refs[s]["far"]["n_disp"][-1])
-            res["stations"].setdefault(s, {})[key] = cmp
-        rt = ds.rupture_time.values
-        fault = ~np.asarray(scene.law.bonded)
-        meta["ruptured_fraction"] = float(np.mean(np.isfinite(rt[fault])))
-        meta["last_rupture_time"] = float(np.nanmax(rt)) if np.isfinite(rt).any() else float("nan")
+    res = H.analyse_runs({f"{dx:g}": store_path(out, dx) for dx in dxs}, lambda st: compare_run(st, refs),
+                         lambda st, rt, fault: {"t_reached": float(st.t.values[-1])})
     finest = min(dxs)
     res["acceptance"] = C.check_acceptance(res["stations"], dx=C.ACCEPT_DX) if C.ACCEPT_DX in dxs else None
     res["indicative"] = None if C.ACCEPT_DX in dxs else C.check_acceptance(
@@ -196,11 +119,7 @@ COLOURS = {"100": "tab:red", "50": "tab:blue", "200": "tab:purple", "400": "tab:
 
 
 def fig_stations(out, dxs, figdir, ref_dir=None):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = H.pyplot()
     paths = []
     runs = {f"{dx:g}": load_run(out, dx)[2] for dx in dxs}
     for s in REF_STATIONS:
@@ -229,20 +148,12 @@ def fig_stations(out, dxs, figdir, ref_dir=None):
             ax.legend(loc="best", fontsize=7)
         axes[-1].set_xlabel("time (s)")
         axes[0].set_title(f"TPV6, {PRETTY[s]}", fontsize=10)
-        fig.tight_layout()
-        p = Path(figdir) / f"tpv6_{s}.png"
-        fig.savefig(p, dpi=100)
-        plt.close(fig)
-        paths.append(p)
+        paths.append(H.save(fig, Path(figdir) / f"tpv6_{s}.png", 100))
     return paths
 
 
 def fig_rupture(out, dxs, figdir, ref_dir=None):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = H.pyplot()
     levels = np.arange(0.5, 12.01, 0.5)
     fig, ax = plt.subplots(figsize=(9.5, 5.4))
     contours = C.load_contours(None if ref_dir is None else Path(ref_dir) / "contour.dat")
@@ -268,11 +179,7 @@ def fig_rupture(out, dxs, figdir, ref_dir=None):
     ax.set_ylabel("depth (km)")
     ax.set_title("rupture time (slip rate > 1 mm/s), contours every 0.5 s", fontsize=10)
     ax.legend(handles=handles, loc="lower right", fontsize=8)
-    fig.tight_layout()
-    p = Path(figdir) / "tpv6_rupture_time.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
-    return [p]
+    return [H.save(fig, Path(figdir) / "tpv6_rupture_time.png", 110)]
 
 
 def contour_offsets(out, dx, ref_dir=None) -> dict:
@@ -299,11 +206,7 @@ def contour_offsets(out, dx, ref_dir=None) -> dict:
 
 
 # ------------------------------------------------------------------------------ page
-def _ok(b):
-    return "yes" if b else "**no**"
-
-
-def _verdict(res):
+def verdict(res):
     """The acceptance sentence (or the indication without a 100 m run)."""
     acc, ind = res["acceptance"], res["indicative"]
     tol = (f"rupture time within {C.TOL_RUPTURE_TIME:g} s, final slip within {100 * C.TOL_FINAL_SLIP:g} %, "
@@ -332,22 +235,10 @@ def _station_rows(res, dxs):
 
     def mark(s, key, q):
         r = checks.get((s, key, q))
-        return "" if r is None else f" ({_ok(r['pass'])})"
+        return "" if r is None else f" ({H.ok(r['pass'])})"
 
-    rows = []
-    for s in REF_STATIONS:
-        for dx in dxs:
-            key = f"{dx:g}"
-            c = res["stations"][s][key]
-            rows.append(
-                f"| {s} | {key} m | {c['sim']['rupture_time']:.3f} | {c['ref']['rupture_time']:.3f} | "
-                f"{c['diff']['rupture_time']:+.3f}{mark(s, key, 'rupture_time')} | "
-                f"{c['sim']['final_slip']:.3f} | {c['ref']['final_slip']:.3f} | "
-                f"{100 * c['rel']['final_slip']:+.1f} %{mark(s, key, 'final_slip')} | "
-                f"{c['sim']['peak_rate']:.3f} | {c['ref']['peak_rate']:.3f} | "
-                f"{100 * c['rel']['peak_rate']:+.1f} %{mark(s, key, 'peak_rate')} | "
-                f"{c['normal_rms']:.2f}{mark(s, key, 'normal_rms')} |")
-    return "\n".join(rows)
+    return H.station_rows(res, REF_STATIONS, dxs, mark,
+                          lambda c, s, key: f"{c['normal_rms']:.2f}{mark(s, key, 'normal_rms')}")
 
 
 def _face_rows(res, dxs):
@@ -403,7 +294,7 @@ def _normal_of(res) -> dict:
     return next(iter(res["runs"].values())).get("normal") or {}
 
 
-def _law_setting(res):
+def law_setting(res):
     """The sentence on the friction law's normal stress of the runs."""
     normal = _normal_of(res)
     other = ' The comparison with another setting is in "Another law setting" below.' if res.get("other") else ""
@@ -419,7 +310,7 @@ def _law_setting(res):
             "docs/equations.md \"Regularised normal stress\"): " + " and ".join(parts) + "." + other)
 
 
-def _other_rows(res, dxs):
+def other_rows(res, dxs):
     """Rows comparing the runs with those of ``res["other"]`` (the same study with another law
     setting, ``--other``) at the spacings both have."""
     other = res.get("other")
@@ -452,7 +343,7 @@ def _other_rows(res, dxs):
             "|---|---|---|---|---|---|---|---|---|---|---|\n" + "\n".join(rows) + summary + "\n")
 
 
-def _surface_rows(res):
+def surface_rows(res):
     """The section of studies/tpv6/surface.py's results (``--surface``): the slip rate's peak at
     and below the surface stations, with the law and with a constant normal stress, and the
     2D analogue of fronts that meet."""
@@ -539,7 +430,7 @@ def _contour_rows(res, dxs):
 
 
 def write_page(res, dxs, page, figrel, notes_path=None, command=None):
-    cmd = command or "python studies/tpv6/run.py"
+    cmd = command or "python -m studies.tpv6.run"
     stopped = [f"{k} m" for k, m in res["runs"].items() if m.get("error")]
     errors = "".join(f"\n\nThe {k} m run was stopped by the solver: `{m['error']}`" for k, m in res["runs"].items()
                      if m.get("error"))
@@ -564,9 +455,9 @@ The reference is MDSBI (E. M. Dunham's spectral boundary-integral code) at 100 m
 (`shared/reference/tpv6_mdsbi`): five on-fault stations, each side's face displacement
 and velocity and the traction, and the rupture-time contours.
 
-{_law_setting(res)}
+{law_setting(res)}
 
-{_verdict(res)}{errors}
+{verdict(res)}{errors}
 
 ## Runs
 
@@ -630,16 +521,9 @@ levels:
 """ + "\n\n".join(f"![{s}]({figrel}/tpv6_{s}.png)" for s in REF_STATIONS) + f"""
 
 ![rupture time]({figrel}/tpv6_rupture_time.png)
-{_other_rows(res, dxs)}{_surface_rows(res)}
+{other_rows(res, dxs)}{surface_rows(res)}
 """
-    notes = Path(notes_path or HERE / "discussion.md")
-    if notes.exists():
-        body = notes.read_text()
-        try:
-            body = body.format(**page_numbers(res, dxs))
-        except (KeyError, IndexError, ValueError) as exc:
-            raise ValueError(f"{notes}: placeholder {exc} not filled from the results") from exc
-        text += body
+    text += H.fill_notes(notes_path or HERE / "discussion.md", page_numbers(res, dxs))
     Path(page).write_text(text)
     return page
 
@@ -750,16 +634,9 @@ def report(res, dxs):
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--out", default=str(ROOT / "out" / "tpv6"))
-    p.add_argument("--dx", type=float, nargs="+", default=None, help="grid spacings in m (default 100)")
-    p.add_argument("--t-end", type=float, default=12.0, help="simulated time of the runs (s)")
-    p.add_argument("--quick", action="store_true", help="400 m, 6 s, into OUT/quick (acceptance not checked)")
-    p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
-    p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
-    p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv6.md)")
-    p.add_argument("--reference", default=None, help="directory of the MDSBI files")
+    p = H.parser(__doc__, "tpv6", dx_help="grid spacings in m (default 100)",
+                 quick_help="400 m, 6 s, into OUT/quick (acceptance not checked)",
+                 reference_help="directory of the MDSBI files")
     p.add_argument("--normal-slip-scale", type=float, default=None,
                    help="the law's normal_slip_scale L* (m): regularised normal stress (Prakash-Clifton)")
     p.add_argument("--normal-time", type=float, default=None,
@@ -772,13 +649,7 @@ def main(argv=None) -> int:
     normal = {k: v for k, v in (("normal_slip_scale", args.normal_slip_scale), ("normal_time", args.normal_time))
               if v is not None}
 
-    out = Path(args.out)
-    if args.quick:
-        out = out / "quick"
-        dxs, t_end = args.dx or [400.0], 6.0
-    else:
-        dxs, t_end = args.dx or [C.ACCEPT_DX], args.t_end
-    dxs = sorted(set(dxs), reverse=True)
+    out, dxs, t_end = H.spacings(args, quick=[400.0], quick_t_end=6.0, default=[C.ACCEPT_DX])
     out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
         for dx in dxs:
@@ -791,17 +662,10 @@ def main(argv=None) -> int:
         res["surface"] = json.loads((Path(args.surface) / "surface_results.json").read_text())
     (out / "tpv6_results.json").write_text(json.dumps(res, indent=1))
     report(res, dxs)
-    figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv6.md" if args.quick else ROOT / "docs" / "tpv6.md"))
-    figdir.mkdir(parents=True, exist_ok=True)
+    figdir, page = H.page_paths(args, out, "tpv6", args.quick)
     fig_stations(out, dxs, figdir, args.reference)
     fig_rupture(out, dxs, figdir, args.reference)
-    try:
-        figrel = Path(figdir).resolve().relative_to(Path(page).resolve().parent)
-    except ValueError:
-        figrel = Path(figdir).resolve()
-    argv_used = sys.argv[1:] if argv is None else list(argv)
-    write_page(res, dxs, page, figrel.as_posix(), command=" ".join(["python", "studies/tpv6/run.py"] + argv_used))
+    write_page(res, dxs, page, H.figure_link(figdir, page), command=H.command_line("studies.tpv6.run", argv))
     print(f"wrote {page}, figures in {figdir}, results in {out / 'tpv6_results.json'}")
     return verdict_status(res)[1]
 

@@ -1,7 +1,7 @@
 """TPV6's surface stations: where the peak slip rate grows with the grid, and why (docs/tpv6.md,
 "The surface stations").
 
-    python studies/tpv6/surface.py [--dx 400 200 100] [-o OUT] [--t-end 7.0]
+    python -m studies.tpv6.surface [--dx 400 200 100] [-o OUT] [--t-end 7.0]
 
 Three TPV6 surface stations (faultst000dp000, faultst-120dp000, faultst120dp000) fail the
 peak slip rate at 100 m, and their peak grows with every refinement. This study separates
@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import functools
 import json
 import sys
 import time
@@ -50,8 +49,9 @@ from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
+from studies.benchmarks import harness as H
+from studies.tpv6 import compare as C
+
 STRIKES_KM = (0, -12, 12)
 SIGMA_N = 120.0e6          # Pa: TPV6's initial compression, held constant in the control
 SAMPLE = 0.005             # s: the reference's sampling, on which the peak is read (as run.py)
@@ -64,22 +64,9 @@ def _stations(grid, xc):
     return {f"st{s:+d}_z{d:g}": (xc + 1000.0 * s, d) for s in STRIKES_KM for d in depths}
 
 
-@functools.lru_cache(maxsize=None)
-def _compare():
-    """studies/tpv6/compare.py by its path (another study's compare may be imported), loaded
-    once."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("tpv6_surface_compare", HERE / "compare.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _measure(t, v):
+def measure(t, v):
     """Peak and rupture time of a slip-rate series, read as run.py reads the stations: on the
     reference's 0.005 s samples (compare.resample, compare.peak, compare.rupture_time)."""
-    C = _compare()
     ts, vs = C.resample(t, v, np.arange(0.0, t[-1] + SAMPLE, SAMPLE))
     return {"peak": C.peak(ts, vs)[0], "rupture_time": C.rupture_time(ts, vs, C.THRESHOLD)}
 
@@ -102,7 +89,7 @@ def run_3d(dx, t_end, constant_normal):
     out = {}
     for s in ds.station.values:
         v = np.hypot(ds.station_v_1.sel(station=s).values, ds.station_v_3.sel(station=s).values)
-        out[str(s)] = {"x3": float(ds.station_x3.sel(station=s)), **_measure(t, v)}
+        out[str(s)] = {"x3": float(ds.station_x3.sel(station=s)), **measure(t, v)}
     return out, time.time() - t0
 
 
@@ -139,7 +126,7 @@ def run_2d(dx, pair):
 
     ds = cracklab.simulate(scene_2d(dx, pair), progress=False)
     t = ds.t_station.values
-    return {str(s): _measure(t, np.abs(ds.station_v_3.sel(station=s).values)) for s in ds.station.values}
+    return {str(s): measure(t, np.abs(ds.station_v_3.sel(station=s).values)) for s in ds.station.values}
 
 
 def scene_inplane(dx, slip_scale=None, t_end=6.0):
@@ -176,14 +163,14 @@ def run_inplane(dx, slip_scale=None):
     out = {}
     for s in ds.station.values:
         n = ds.station_tau_2.sel(station=s).values / 1e6
-        out[str(s)] = {**_measure(t, np.abs(ds.station_v_1.sel(station=s).values)),
+        out[str(s)] = {**measure(t, np.abs(ds.station_v_1.sel(station=s).values)),
                        "normal": [float(n.min()), float(n.max())]}
     return out
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("-o", "--out", default=str(ROOT / "out" / "tpv6" / "surface"))
+    p.add_argument("-o", "--out", default=str(H.ROOT / "out" / "tpv6" / "surface"))
     p.add_argument("--dx", type=float, nargs="+", default=[400.0, 200.0, 100.0], help="3D grid spacings (m)")
     p.add_argument("--dx-2d", type=float, nargs="+", default=[200.0, 100.0, 50.0, 25.0], help="2D spacings (m)")
     p.add_argument("--t-end", type=float, default=7.0, help="simulated time of the 3D runs (s)")

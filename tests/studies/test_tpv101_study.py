@@ -2,30 +2,12 @@
 on synthetic data with known answers, and the uguca reference files it reads."""
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-STUDY = ROOT / "studies" / "tpv101"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"tpv101_{name}", STUDY / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(STUDY))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(STUDY))
-    return mod
-
-
-C = _load("rs_compare")
+from studies.tpv101 import rs_compare as C
 
 
 def _pulse(dt=1e-3, t_r=2.345, peak=4.0, t_end=15.0, D=5.0):
@@ -201,7 +183,7 @@ def test_tpv103_acceptance_stability_and_convergence():
 
 
 def test_exit_status_follows_the_acceptance():
-    run = _load("run")
+    from studies.tpv101 import run
     assert run.exit_status({"acceptance": C.check_tpv101(*_good())}) == 0
     stations, field, runs, fields = _good()
     stations["faultst000dp030"] = _cmp(drt=0.2)
@@ -213,7 +195,7 @@ def test_exit_status_follows_the_acceptance():
 
 
 def test_the_page_states_the_verdict_and_the_failures():
-    page = _load("rs_page")
+    from studies.tpv101 import rs_page as page
     stations, field, runs, fields = _good()
     stations["faultst090dp075"] = _cmp(dpeak=0.2)
     res = {"acceptance": C.check_tpv101(stations, field, runs, fields)}
@@ -239,9 +221,9 @@ def test_the_uguca_reference_reads():
 
 
 def test_the_page_finds_mirrored_stations_and_which_run_is_nearer():
-    page = _load("rs_page")
-    assert page._mirror("faultst-090dp075") == {"faultst090dp075"}
-    assert page._mirror("faultst120dp030") == {"faultst-120dp030", "faultst120dp120", "faultst-120dp120"}
+    from studies.tpv101 import rs_page as page
+    assert page.mirror("faultst-090dp075") == {"faultst090dp075"}
+    assert page.mirror("faultst120dp030") == {"faultst-120dp030", "faultst120dp120", "faultst-120dp120"}
     m = {"rupture_time": 3.0, "peak_rate": 4.0, "final_slip": 5.0}
     run = {"stations": {s: dict(m) for s in STATIONS9}}
     run["stations"]["faultst-120dp120"]["peak_rate"] = 4.25

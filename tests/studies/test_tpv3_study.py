@@ -2,29 +2,10 @@
 synthetic series with known answers, the builder's nucleation patch, and a coarse run."""
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-STUDY = ROOT / "studies" / "tpv3"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"tpv3_{name}", STUDY / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(STUDY))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(STUDY))
-    return mod
-
-
-C = _load("compare")
+from studies.tpv3 import compare as C
 
 
 def _synthetic(dt=1e-3, t_r=2.3456, peak=2.5, t_end=6.0, D=3.0):
@@ -129,7 +110,7 @@ def test_coarse_tpv3_rupture_time():
     cell and the coarse front is late (3.17 s at 600 m, 3.14 s at 400 m; docs/tpv3.md).
     The displacement scheme (beta = 0.049): at this resolution the product scheme's
     beta = 0.25 delays the front by another 0.35 s or more (docs/tpv3.md, "Numerics")."""
-    run = _load("run")
+    from studies.tpv3 import run
     from cracklab.model.record import Record
     from cracklab.scenes import tpv3
     from cracklab.output.simulate import simulate, stations
@@ -162,7 +143,7 @@ def _cmp(station, **perturb):
 
 
 def test_acceptance_passes_on_the_reference_and_fails_on_perturbed_series():
-    run = _load("run")
+    from studies.tpv3 import run
     assert run.REF_STATIONS == ("faultst075dp000", "faultst000dp-030")
     same = {s: {"100": _cmp(s)} for s in run.REF_STATIONS}
     ok = C.check_acceptance(same)
@@ -211,7 +192,7 @@ def test_study_reports_fail_and_exits_nonzero_on_a_perturbed_run():
     records with one of them perturbed."""
     import xarray as xr
 
-    run = _load("run")
+    from studies.tpv3 import run
 
     def dataset(**perturb):
         names = ["faultst000dp000", "faultst075dp000", "faultst000dp-030", "faultst000dp030"]
@@ -246,7 +227,7 @@ def test_study_reports_fail_and_exits_nonzero_on_a_perturbed_run():
 def test_the_main_runs_are_the_builders_default_time_stepping():
     """A plain `run.py` runs scenes.tpv3 as the builder steps it without numerics
     (product2 at beta 0.125); `--formulation product` is the first-order check."""
-    run = _load("run")
+    from studies.tpv3 import run
     from cracklab.scenes import tpv3
 
     main, builder = run.build_scene(1000.0, 0.5), tpv3(dx=1000.0, t_end=0.5)

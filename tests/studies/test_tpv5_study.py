@@ -4,9 +4,7 @@ copies of them, the lag fit over beta, the cell check, the free-surface station'
 and the study's path from a stations Dataset to its verdict, page and exit status."""
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -14,23 +12,8 @@ import pytest
 
 from cracklab.solver.schemes import SCHEMES
 
-ROOT = Path(__file__).resolve().parents[2]
-STUDY = ROOT / "studies" / "tpv5"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"tpv5_{name}", STUDY / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(STUDY))
-    try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(STUDY))
-    return mod
-
-
-C = _load("compare")
-run = _load("run")
+from studies.tpv5 import compare as C
+from studies.tpv5 import run
 
 
 def _reference_as_sim(station, *, shift=0.0, slip_scale=1.0, rate_scale=1.0):
@@ -219,15 +202,15 @@ def test_scheme_check_and_second_order_lag_fit_on_the_page(tmp_path):
                        "beta0.0625": analysed(0.0075, beta=0.0625, nsteps=6652)}
     res["baselines"] = {"runs": res["runs"], "stations": res["stations"]}
     s = "faultst-075dp075"
-    lags = [run._lag(res["stations"][s]["100"]), run._lag(res["variants"]["beta0.0625"]["stations"][s]["100"])]
+    lags = [run.lag(res["stations"][s]["100"]), run.lag(res["variants"]["beta0.0625"]["stations"][s]["100"])]
     lag = {s: {**C.lag_fit([0.125, 0.0625], lags, beta_now=0.125, order=SCHEMES["product2"].front_order),
                "betas": [0.125, 0.0625], "lags": lags}}
     assert lag[s]["order"] == 2 and abs(lag[s]["a"]) < 2e-3 and lag[s]["b"] * 0.125**2 == pytest.approx(0.03, abs=2e-3)
     res["lag"] = lag
-    sentence = run._scheme_sentence(res)
+    sentence = run.scheme_sentence(res)
     assert "first-order product scheme" in sentence and "misses 1 of the 15" in sentence
     assert "with product2 at beta = 0.125" in sentence
-    text = run._variant_section(res)
+    text = run.variant_section(res)
     assert "| product, beta 0.1250, 48 km x 24 km |" in text and "lag = a + b beta^2" in text
     page = Path(run.write_page(res, [100.0], tmp_path / "tpv5.md", "figures")).read_text()
     assert "{" not in page and "}" not in page and "product2 is second order in dt. Fitted over beta^2" in page

@@ -3,30 +3,21 @@ synthetic series and files with known answers, and the reference read as its REA
 describes it."""
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-STUDY = ROOT / "studies" / "tpv6"
-REF = ROOT.parent / "shared" / "reference" / "tpv6_mdsbi"
+from studies.benchmarks.harness import reference_dir
+from studies.tpv6 import compare as C
 
 
-def _load(name):
-    spec = importlib.util.spec_from_file_location(f"tpv6_{name}", STUDY / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(STUDY))
+def _reference():
     try:
-        spec.loader.exec_module(mod)
-    finally:
-        sys.path.remove(str(STUDY))
-    return mod
+        return reference_dir("tpv6_mdsbi")
+    except FileNotFoundError:
+        return None
 
 
-C = _load("compare")
+REF = _reference()
 
 
 def pulse(dt, t_r, peak=10.0, D=6.0, t_end=12.0):
@@ -146,7 +137,7 @@ def test_contours_parsed_by_level(tmp_path):
         C.load_contours(tmp_path / "empty.dat")
 
 
-@pytest.mark.skipif(not REF.is_dir(), reason="the MDSBI reference is not on this machine")
+@pytest.mark.skipif(REF is None or not REF.is_dir(), reason="the MDSBI reference is not on this machine")
 def test_the_reference_reads_as_its_readme_says():
     """README: at (0, 0) the final h-disp is +7.92 m far and -2.51 m near (10.43 m of slip);
     n-stress swings between -147 and -71 MPa at (12 km, 0); contours every 0.5 s (the file's
@@ -163,58 +154,58 @@ def test_the_reference_reads_as_its_readme_says():
 
 
 def test_verdict_without_the_100_m_run_is_not_checked():
-    R = _load("run")
+    from studies.tpv6 import run as R
     ref, _ = reference()
     good = C.compare_station(simulation(t_r=5.06), ref)
     res = {"runs": {"200": {"error": None}}, "stations": {s: {"200": good} for s in R.REF_STATIONS},
            "acceptance": None}
     res["indicative"] = C.check_acceptance(res["stations"], dx=200.0)
     assert R.verdict_status(res) == ("NOT CHECKED (no 100 m run)", 2)
-    assert "NOT CHECKED" in R._verdict(res) and "20 of 20 hold" in R._verdict(res)
+    assert "NOT CHECKED" in R.verdict(res) and "20 of 20 hold" in R.verdict(res)
     res["runs"]["200"]["error"] = "exponential growth of v_1"
     assert R.verdict_status(res)[1] == 2
     res = {"runs": {"100": {"error": None}}, "stations": {s: {"100": good} for s in R.REF_STATIONS},
            "indicative": None}
     res["acceptance"] = C.check_acceptance(res["stations"])
-    assert R.verdict_status(res) == ("PASS", 0) and "PASS" in R._verdict(res)
+    assert R.verdict_status(res) == ("PASS", 0) and "PASS" in R.verdict(res)
     bad = C.compare_station(simulation(t_r=5.2), ref)
     res["stations"]["faultst120dp075"]["100"] = bad
     res["acceptance"] = C.check_acceptance(res["stations"])
-    assert R.verdict_status(res) == ("FAIL", 1) and "faultst120dp075" in R._verdict(res)
+    assert R.verdict_status(res) == ("FAIL", 1) and "faultst120dp075" in R.verdict(res)
 
 
 def test_the_page_names_the_law_setting_and_compares_another_setting():
-    R = _load("run")
+    from studies.tpv6 import run as R
     ref, _ = reference()
     reg = C.compare_station(simulation(t_r=5.06), ref)
     unreg = C.compare_station(simulation(t_r=5.06, slip_factor=1.5), ref)
     res = {"runs": {"100": {"error": None, "normal": {}}},
            "stations": {s: {"100": unreg} for s in R.REF_STATIONS}}
-    assert "no regularisation" in R._law_setting(res)
-    assert R._other_rows(res, [100.0]) == ""
+    assert "no regularisation" in R.law_setting(res)
+    assert R.other_rows(res, [100.0]) == ""
     res["other"] = {"runs": {"100": {"error": None, "normal": {"normal_slip_scale": 0.1}}},
                     "stations": {s: {"100": reg} for s in R.REF_STATIONS},
                     "acceptance": C.check_acceptance({s: {"100": reg} for s in R.REF_STATIONS})}
-    assert '"Another law setting"' in R._law_setting(res)
-    text = R._other_rows(res, [100.0])
+    assert '"Another law setting"' in R.law_setting(res)
+    text = R.other_rows(res, [100.0])
     assert "| peak, as stated | peak, L* = 0.1 m |" in text
     row = [line for line in text.splitlines() if line.startswith("| faultst120dp075 | 100 |")][0]
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert float(cells[2]) == pytest.approx(1.5 * float(cells[3]), rel=1e-2)     # the peaks, 1.5 times apart
     assert cells[7] == "+50.0"                                                  # final slip, as stated
     assert "With L* = 0.1 m the acceptance at 100 m is" in text
-    assert "`normal_slip_scale` = 0.1 m" in R._law_setting(res["other"])
+    assert "`normal_slip_scale` = 0.1 m" in R.law_setting(res["other"])
 
 
 def test_the_surface_section_reads_the_surface_study():
-    R = _load("run")
+    from studies.tpv6 import run as R
     run = {f"st{s}_z{z}": {"x3": float(z), "peak": p + (s == "+0") * 5.0, "rupture_time": 3.5}
            for s in ("+0", "-12", "+12") for z, p in (("0", 20.0), ("100", 11.0), ("400", 9.5), ("800", 9.0))}
     const = {k: dict(v, peak=v["peak"] + 1.0) for k, v in run.items()}
     meet = {"meet": {"peak": 42.0, "rupture_time": 6.7}, "quarter": {"peak": 17.0, "rupture_time": 3.3}}
     res = {"surface": {"t_end": 7.0, "runs": {"law": {"100": run}, "constant_normal": {"100": const}},
                        "analogue": {"tpv6": {"100": meet}}}}
-    text = R._surface_rows(res)
+    text = R.surface_rows(res)
     row = [line for line in text.splitlines() if line.startswith("| +0 km | 100 m |")][0]
     assert "| 25.0 / 26.0 | 16.0 / 17.0 | 14.5 / 15.5 | 14.0 / 15.0 |" in row     # by depth, law / constant
     assert "| the TPV6 pair | 100 m | 42.0 | 17.0 |" in text
@@ -222,24 +213,24 @@ def test_the_surface_section_reads_the_surface_study():
                                                                    "normal": [-150.0, -80.0]}
                                                      for k in (-12, -6, 6, 12)}},
                                  "0.1": {"100": {"error": "grew"}}}
-    text = R._surface_rows(res)
+    text = R.surface_rows(res)
     assert "| as stated | 100 m | -2.0 | 4.0 | 16.0 | 22.0 | -150 to -80 |" in text
     assert "| L* = 0.1 m | 100 m | stopped by the solver |" in text
     d = R.surface_numbers(res["surface"])
     assert (d["ilaw_p12_100"], d["ilaw_m6_100_nmin"]) == ("22.0", "-150") and "iL0p1_p12_100" not in d
     assert (d["s0_0_law_100"], d["s0_below_const_100"], d["s12_800_law_100"]) == ("25.0", "17.0", "9.0")
-    assert R._surface_rows({}) == ""
+    assert R.surface_rows({}) == ""
 
 
 def test_the_scene_takes_the_regularisation():
-    S = _load("scene")
+    from studies.tpv6 import scene as S
     sc = S.build_scene(400.0, t_end=1.0, normal={"normal_slip_scale": 0.1, "normal_time": 0.05})
     assert (sc.law.normal_slip_scale, sc.law.normal_time, sc.law.sigma_n) == (0.1, 0.05, None)
     assert S.build_scene(400.0, t_end=1.0).law.normal_slip_scale is None
 
 
 def test_the_surface_studys_analogues_are_the_scenes_it_describes():
-    S = _load("surface")
+    from studies.tpv6 import surface as S
     from cracklab.scenes import TPV6_FAR, TPV6_NEAR
 
     one = S.scene_2d(200.0, "one_speed")
@@ -253,5 +244,5 @@ def test_the_surface_studys_analogues_are_the_scenes_it_describes():
     assert inp.components == (1, 2) and inp.formulation == "product2"
     assert sorted(inp.record.stations) == ["+12", "+6", "-12", "-6"]
     t = np.linspace(0.0, 1.0, 201)
-    m = S._measure(t, np.where(t >= 0.5, 2.0, 0.0))
+    m = S.measure(t, np.where(t >= 0.5, 2.0, 0.0))
     assert m["peak"] == 2.0 and m["rupture_time"] == pytest.approx(0.5)
