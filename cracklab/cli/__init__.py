@@ -507,6 +507,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
     from .. import plots as P
     from ..ensemble import member_path, member_status, open_ensemble, open_member, store_kind
     from ..errors import InputError, StoreError
+    from ..plots.common import _member
 
     try:
         ens = store_kind(store) == "ensemble"
@@ -553,7 +554,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
     except (InputError, StoreError) as exc:
         raise fail(exc) from None
     if time_ is not None and kind in ("snapshot", "all"):
-        _check_time(ds if "member" not in ds.dims else P._member(ds, 0), time_)
+        _check_time(ds if "member" not in ds.dims else _member(ds, 0), time_)
     if field not in ds.data_vars and kind in ("snapshot", "gif"):
         recorded = [v for v in ds.data_vars if "t" in ds[v].dims]
         raise click.ClickException(f"--field {field}: not recorded in this result; recorded: "
