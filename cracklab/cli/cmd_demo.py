@@ -21,12 +21,11 @@ def demo(out: str, scheduler, workers, no_lamb) -> None:
     """Run the demonstration: the asperity ensemble of studies/asperity_ensemble on a
     local dask cluster into OUT/ensemble.zarr with summary figures OUT/*.png, and
     Lamb's problem against Pekeris (OUT/lamb.zarr, OUT/lamb.png)."""
-    import cracklab.cli.demo
-
     from ..errors import InputError
+    from .demo import main as run_demo
 
     try:
-        ok = cracklab.cli.demo.main(out=out, scheduler=scheduler, workers=workers, lamb=not no_lamb)
+        ok = run_demo(out=out, scheduler=scheduler, workers=workers, lamb=not no_lamb)
     except InputError as exc:
         raise fail(exc, {"scheduler": "--scheduler"}) from None
     except KeyboardInterrupt:
