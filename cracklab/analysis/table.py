@@ -7,6 +7,7 @@ import os
 import numpy as np
 import xarray as xr
 
+from .fronts import front_position
 from .members import member_coords, over_members
 from .rupture import rupture_statistics, scene_dict
 
@@ -23,8 +24,6 @@ def measures(data) -> xr.Dataset:
     ``rupture_statistics`` and, at its end, the mean crack-front position and the front's
     standard deviation along x3 (``front_position`` from rupture_time), and the mean
     front speed over the last quarter of the run."""
-    from . import front_position
-
     out = rupture_statistics(data)
     t_end = float(out["duration"])
     units = data["x1"].attrs.get("units", "1")

@@ -33,11 +33,12 @@ the client. A rerun verifies the members whose group says ``complete`` (``crackl
 skips the sound ones and redoes the others, damaged ones included. A complete member
 that is run again is written to a hidden sibling group and swapped in whole.
 
-Modules: ``spec`` (Builder, Sweep, Study, Member, SweepResult), ``builders`` (the builder
-registry), ``identity`` (canonical values, member ids, digests), ``planning`` (the members
+Modules: ``spec`` (Builder, Sweep, Study, Member, SweepResult), ``identity`` (canonical
+values, member ids, digests), ``planning`` (the members
 of a sweep, one member's scene), ``store`` (paths, checks, member records, atomic
 replacement), ``lock`` (the store lock), ``running`` (dask, ``run``, the worker task),
 ``study`` (STUDY.toml), ``read`` (member_status, open_member, open_ensemble, member_scene);
+the builder registry is ``cracklab.scenes.registry``;
 ``summary`` (the table of parameters and measures per member) is computed by
 ``cracklab.analysis``;
 the netCDF export is ``cracklab.output.netcdf``.
@@ -46,8 +47,8 @@ See docs/ensembles.md for the STUDY.toml format and examples.
 """
 from ..errors import InputError, StoreError
 from ..output.netcdf import export_netcdf, netcdf_ready
-from .builders import (ENTRY_POINT_GROUP, builder_name, register_builder, registered_builders,
-                       resolve_builder, unregister_builder)
+from ..scenes.registry import (ENTRY_POINT_GROUP, builder_name, register_builder, registered_builders,
+                               resolve_builder, unregister_builder)
 from .identity import (FORMAT, ID_LENGTH, canonical, canonical_json, coordinate_name, member_id,
                        scene_digest)
 from .lock import LOCK_GRACE_S, LOCK_NAME, StoreLocked, store_lock

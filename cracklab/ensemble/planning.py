@@ -9,7 +9,7 @@ import itertools
 import numpy as np
 
 from ..errors import InputError
-from .builders import accepts, builder_name, resolve_builder
+from ..scenes.registry import accepts, builder_name, resolve_builder
 from .identity import canonical, canonical_json, decode, member_id, scene_digest
 from .spec import Builder, Member, Sweep
 

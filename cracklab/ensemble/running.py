@@ -12,7 +12,7 @@ import time
 from pathlib import Path
 
 from ..errors import InputError, SchedulerError
-from .builders import builder_name, resolve_builder
+from ..scenes.registry import builder_name, resolve_builder
 from .identity import canonical, canonical_json, scene_digest
 from .lock import store_lock
 from .planning import as_sweep, build_scene, check_paths, check_section_keys, plan, split_params
@@ -127,7 +127,7 @@ def preflight(base_scene, members, *, fft_threads=1, sweep=None, outputs=None) -
     a dict, receives {member id: OutputEstimate} of the members built here."""
     from ..model.scene import Scene
     from ..solver.budget import run_memory
-    from .builders import _own_builders
+    from ..scenes.registry import _own_builders
 
     own = _own_builders()
     out, built = {}, {}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .builders import builder_name, resolve_builder
+from ..scenes.registry import builder_name, resolve_builder
 
 
 class Builder:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import InputError
-from .builders import resolve_builder
+from ..scenes.registry import resolve_builder
 from .identity import canonical
 from .planning import SECTIONS
 from .running import run

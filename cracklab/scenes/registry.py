@@ -1,11 +1,21 @@
-"""The builder registry: cracklab's own scene builders (``scenes.BUILDERS``), those
-registered with ``register_builder``, and entry points of the group "cracklab.builders"."""
+"""The builder registry: cracklab's own scene builders (``BUILDERS``), those registered
+with ``register_builder``, and entry points of the group "cracklab.builders"."""
 from __future__ import annotations
 
 import functools
 import inspect
 
 from ..errors import InputError
+from .fronts import asperity_row, random_toughness
+from .paper import elliptical_crack, kostrov, lamb, periodic_cracks
+from .scec import tpv3, tpv5, tpv6, tpv101, tpv102, tpv103, tpv104
+
+# The scene builders a study file may name (resolve_builder): exactly these functions of
+# cracklab.scenes, by name. No other name of cracklab.scenes (a helper, or ``np``) is
+# reachable from a study; further builders are registered explicitly (register_builder,
+# or the entry-point group "cracklab.builders").
+BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv5", "tpv6", "tpv101", "tpv102",
+            "tpv103", "tpv104", "asperity_row", "random_toughness")
 
 ENTRY_POINT_GROUP = "cracklab.builders"
 REGISTERED: dict = {}          # name -> function, from register_builder
@@ -13,10 +23,8 @@ ENTRY_POINT_CACHE: dict = {}   # (name, entry point value) -> loaded function
 
 
 def _own_builders() -> dict:
-    """cracklab's own builders: the functions of cracklab.scenes listed in scenes.BUILDERS."""
-    from .. import scenes
-
-    return {name: getattr(scenes, name) for name in scenes.BUILDERS}
+    """cracklab's own builders: the functions of cracklab.scenes listed in BUILDERS."""
+    return {name: globals()[name] for name in BUILDERS}
 
 
 def _entry_points() -> dict:

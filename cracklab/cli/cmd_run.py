@@ -1,0 +1,150 @@
+"""``cracklab run``: one scene into a Zarr store (resumable), or a dry run."""
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from .common import CONTEXT, _fmt_time, _interrupted, _load_scene, fail, main
+
+
+def _dry_run_scene(sc, source: str) -> bool:
+    """Print what a run of ``sc`` would take; False when it does not fit in memory."""
+    from ..errors import MemoryBudgetError
+    from ..history import resolve_engine
+    from ..solver.budget import available_memory, calibrate, check_memory, fmt_bytes, run_memory
+
+    est = run_memory(sc)
+    g = sc.grid
+    rec = sc.record
+    nsnap = len(rec.snapshot_steps(sc.nsteps, sc.dt)) if rec.fields else 0
+    click.echo(f"cracklab: dry run of {sc.name!r} ({source}); nothing is written")
+    click.echo(f"  grid      {g.n1} x {g.n3}{' (half plane)' if g.free_surface else ''}, components "
+               f"{', '.join(map(str, sc.components))}, {sc.formulation} scheme, "
+               f"{resolve_engine(sc.numerics.engine, sc.numerics.window)} engine")
+    click.echo(f"  steps     {sc.nsteps} of dt = {sc.dt:.4g} (t_end = {sc.t_end:g}); {nsnap} snapshots of "
+               f"{', '.join(rec.fields) or 'no field'}, {len(rec.stations or {})} stations")
+    avail, source_mem = available_memory()
+    try:
+        check_memory(est)
+        verdict = "fits"
+    except MemoryBudgetError:
+        verdict = "does NOT fit: the run would be refused"
+    click.echo(f"  memory    {est.describe()}; {fmt_bytes(avail)} {source_mem}: {verdict}")
+    if verdict != "fits":
+        click.echo("  run time  not calibrated (the run does not fit in memory)")
+        return False
+    cal = calibrate(sc)
+    click.echo(f"  run time  about {_fmt_time(cal['setup_s'] + cal['run_s'])} ({cal['ms_per_step']:.3g} ms per "
+               f"step over {cal['steps_timed']} timed steps, setup {cal['setup_s']:.2g} s)")
+    return True
+
+
+RUN_FLAGS = {"checkpoint_every": "--checkpoint-every", "resume": "--resume"}
+
+
+@main.command(context_settings=CONTEXT)
+@click.argument("scene", type=click.Path(exists=True))
+@click.option("-o", "--output", default=None, type=click.Path(), help="Zarr store to write (required but "
+              "with --dry-run).")
+@click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
+@click.option("--checkpoint-every", default=None, metavar="N|Ss",
+              help="Checkpoint the run into OUTPUT every N steps, or every S seconds of wall time "
+                   "('60s'); 0: never. Default: every 60 s (at most 10 % of the run time).")
+@click.option("--resume/--no-resume", default=True, show_default=True,
+              help="When OUTPUT holds an unfinished run of the same scene (killed, interrupted), continue "
+                   "it from its last checkpoint (same results); when it holds the complete run, do nothing. "
+                   "--no-resume starts the run over.")
+@click.option("--overwrite", is_flag=True,
+              help="Replace OUTPUT even when it holds the run of another scene (refused otherwise).")
+@click.option("--dry-run", is_flag=True,
+              help="Print the memory estimate, the steps and an estimated run time (from a few timed steps); "
+                   "write nothing.")
+@click.option("--no-memory-check", is_flag=True,
+              help="Run even when the memory estimate exceeds the memory available.")
+def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_run, no_memory_check) -> None:
+    """Run SCENE (a TOML scene or the Zarr store of an earlier run) into OUTPUT.
+
+    Ctrl-C stops the run after the step in progress and checkpoints it: the same command
+    continues it. Exit status 130 when interrupted, 1 on an error."""
+    from ..errors import InputError, Interrupted, SimulationError, StoreError
+    from ..output import checkpoint
+    from ..output.simulate import simulate
+
+    try:
+        sc = _load_scene(scene)
+    except InputError as exc:
+        raise fail(exc) from None
+    if dry_run:
+        if not _dry_run_scene(sc, scene):
+            sys.exit(1)
+        return
+    if output is None:
+        raise click.UsageError("Missing option '-o' / '--output' (the Zarr store to write).")
+    if progress is None:
+        progress = sys.stderr.isatty()
+    path = checkpoint.local_path(output)
+    done = False
+    try:
+        if path is not None:
+            kind, attrs = checkpoint.inspect(path)
+            if kind == "run":
+                same = _same_scene(sc, attrs)
+                if not same and not overwrite:
+                    raise StoreError(path, f"holds the run of another scene ({_scene_label(attrs)}); refusing to "
+                                           f"replace it: choose another -o, or --overwrite")
+                resume = resume and same and not overwrite
+                done = resume and attrs.get("cracklab_status") == "complete"
+            else:
+                resume = False              # nothing of this scene to continue
+    except (StoreError, InputError) as exc:
+        raise fail(exc, RUN_FLAGS) from None
+    import warnings
+
+    from ..errors import StoreWarning
+
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", StoreWarning)
+            try:
+                simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume,
+                         check_memory=not no_memory_check)
+            finally:
+                for w in caught:
+                    if issubclass(w.category, StoreWarning):
+                        click.echo(f"cracklab: {w.message}", err=True)
+                    else:
+                        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+        done = done and not any(issubclass(w.category, StoreWarning) for w in caught)
+    except Interrupted as exc:
+        _interrupted(f"interrupted at step {exc.step}; rerun the same command to resume")
+    except KeyboardInterrupt:
+        step = checkpoint.read_entry(path, "n") if path is not None else None
+        _interrupted(f"interrupted at step {step}; rerun the same command to resume" if step is not None else
+                     "interrupted before the first checkpoint; rerun the same command to start again")
+    except (SimulationError, StoreError, InputError) as exc:
+        raise fail(exc, RUN_FLAGS) from None
+    if done:
+        click.echo(f"cracklab: {output} holds this run, complete (checked); nothing to do (--no-resume computes "
+                   f"it again)")
+    else:
+        click.echo(f"cracklab: wrote {output}")
+
+
+def _same_scene(sc, attrs) -> bool:
+    from ..model.scene_io import scene_to_json
+    from ..output.checkpoint import scene_digest
+
+    text, inputs = scene_to_json(sc)
+    if "cracklab_scene_digest" in attrs:
+        return attrs["cracklab_scene_digest"] == scene_digest(text, inputs)
+    return attrs.get("scene") == text
+
+
+def _scene_label(attrs) -> str:
+    try:
+        name = json.loads(attrs.get("scene", "{}")).get("name", "?")
+    except ValueError:
+        name = "?"
+    return f"scene {name!r}, status {attrs.get('cracklab_status', '?')}"
