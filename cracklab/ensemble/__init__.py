@@ -56,7 +56,8 @@ from .planning import SECTIONS, SEED_BITS, TOP_LEVEL, apply_paths, build_scene, 
 from .read import NO_INTEGER, UNREADABLE, member_scene, member_status, open_ensemble, open_member
 from .running import run
 from .spec import Builder, Member, Study, Sweep, SweepResult
-from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind, write_member_table
+from .members_table import write_member_table
+from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind
 from .study import STUDY_KEYS, load_study, run_study
 
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",

@@ -51,7 +51,7 @@ from ..elastic.kernels import FACE_KERNELS
 from ..elastic.modes import gammas_sample, mode_gamma, modes
 from ..elastic.weights import FORMULATIONS, RULES, convolution_weights, product_taps
 from . import tables
-from .base import register
+from .base import BLOCK as _BLOCK, register
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
 
@@ -63,8 +63,6 @@ _LEVELS = np.array(sorted({1, 2, 3, 4, 5, 6, 7, 8} | {int(round(2 ** (k / 4))) f
 _RESYNC = 512
 #: start of the fitted representation used by the engine (exact taps for T < ENGINE_T0)
 ENGINE_T0 = 4.0
-#: steps the compiled loop advances the states at once, and taps it keeps at least (blocked.py)
-_BLOCK = 8
 _SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact", "product")  # recompute the powers of weight() exactly every so many calls
 
 
