@@ -3,9 +3,9 @@
 Geubelle & Rice (1995), J. Mech. Phys. Solids 43(11): modes I, II and III, 3D and 2D.
 """
 
-__version__ = "0.1.0"
-
 import os as _os
+
+from .version import __version__
 
 # The history engine's numba loop runs on OpenMP threads, the FFTs on FFTW's own: OpenMP
 # workers that spin after a parallel region (the GNU default) take the cores the FFTs

@@ -54,7 +54,7 @@ import numpy as np
 import scipy.fft as sfft
 import xarray as xr
 
-from ..solver import kernels
+from ..elastic import kernels
 from ..errors import InputError
 from ..laws.base import cell_area_and_width, failed_length
 from ..model.record import Record

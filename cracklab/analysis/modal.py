@@ -110,7 +110,7 @@ __all__ = [
 MODES = ("I", "II", "III")
 FORMULATIONS = ("displacement", "velocity")
 #: the paper's three convolution rules; "exact" (exactly pre-integrated kernel) is
-#: accepted as well when cracklab.solver.weights provides it
+#: accepted as well when cracklab.elastic.weights provides it
 CONVOLUTIONS = ("discretized", "trapezoid", "simpson")
 INTEGRATIONS = ("explicit", "semi-implicit")
 #: the 12 (formulation, convolution, integration) implementations of section 3.1
@@ -203,13 +203,13 @@ def eta_hat(mode: str, nu: float) -> float:
     """Radiation damping factor relative to mu/(2 c_s): a = c_d/c_s for mode I, else 1."""
     mode = _choice("mode", mode, MODES)
     nu = _poisson(nu)
-    from ..solver.kernels import eta_hat as _eta
+    from ..elastic.kernels import eta_hat as _eta
 
     return float(_eta(mode, nu))
 
 
 def _weights(mode, gamma, N, nu, formulation, convolution, simpson_n):
-    from ..solver.weights import convolution_weights
+    from ..elastic.weights import convolution_weights
 
     j = np.arange(N + 1)
     kwargs = dict(nu=nu, rule=convolution, formulation=formulation)
@@ -221,7 +221,7 @@ def _weights(mode, gamma, N, nu, formulation, convolution, simpson_n):
     return w
 
 
-from ..solver.weights import (  # noqa: E402  (the product weights live with the solver)
+from ..elastic.weights import (  # noqa: E402  (the product weights live with the solver)
     CUBIC as _CUBIC,
     GAUSS_U as _GLU,
     GAUSS_W as _GLW,
@@ -241,7 +241,7 @@ def _z_moments(mode, gamma, ncell, nu):
     Cell c of the kernel (T in [c gamma, (c+1) gamma]) is the velocity cell
     [t_k, t_{k+1}], k = n - 1 - c, at step n; u' runs forward in time on it.
     """
-    from ..solver.kernels import Z
+    from ..elastic.kernels import Z
 
     T = (np.arange(ncell)[:, None] + 1.0 - _GLU[None, :]) * gamma
     z = np.asarray(Z(mode, T, nu), dtype=float) * _GLW
@@ -380,13 +380,13 @@ def _run_product(mode, gamma, N, nu, order, integration, passes):
 
 
 def _halves_last(convolution: str) -> bool:
-    from ..solver.weights import halves_last
+    from ..elastic.weights import halves_last
 
     return bool(halves_last(convolution))
 
 
 def _static(mode, nu) -> float:
-    from ..solver.kernels import static_integral
+    from ..elastic.kernels import static_integral
 
     return float(static_integral(mode, nu))
 
@@ -590,7 +590,7 @@ def _as_dataarray(r, bad_from, mode, gamma, nu, formulation, convolution, integr
 
 # ----------------------------------------------------------------------------- long time
 def _rayleigh_ratio(nu: float) -> float:
-    from .exact import rayleigh_speed_ratio
+    from ..elastic.waves import rayleigh_speed_ratio
 
     return float(rayleigh_speed_ratio(nu))
 
@@ -599,7 +599,7 @@ def long_time_amplitude(mode, nu=0.25) -> float:
     """Amplitude A of the long-time form r ~ A sin(s_R T) for modes I and II (Appendix B).
 
     In T and s = p/(q c_s), L[r](s) = eta / M(s) with the impedance
-    ``M(s) = eta s + L[C](s)`` (:func:`cracklab.solver.kernels.impedance`).  The poles
+    ``M(s) = eta s + L[C](s)`` (:func:`cracklab.elastic.kernels.impedance`).  The poles
     ``s = +- i s_R`` give ``r ~ 2 Re[eta e^{i s_R T} / M'(i s_R)]``; M is real on the
     imaginary axis below the branch points and ``M'(iy) = -i dM(iy)/dy``, so
     ``A = -2 eta / (dM(iy)/dy)`` at ``y = s_R``.  The value is taken from

@@ -41,12 +41,12 @@ replacement), ``lock`` (the store lock), ``running`` (dask, ``run``, the worker 
 the builder registry is ``cracklab.scenes.registry``;
 ``summary`` (the table of parameters and measures per member) is computed by
 ``cracklab.analysis``;
-the netCDF export is ``cracklab.output.netcdf``.
+the netCDF export is ``cracklab.ensemble.netcdf``.
 
 See docs/ensembles.md for the STUDY.toml format and examples.
 """
 from ..errors import InputError, StoreError
-from ..output.netcdf import export_netcdf, netcdf_ready
+from .netcdf import export_netcdf, netcdf_ready
 from ..scenes.registry import (ENTRY_POINT_GROUP, builder_name, register_builder, registered_builders,
                                resolve_builder, unregister_builder)
 from .identity import (FORMAT, ID_LENGTH, canonical, canonical_json, coordinate_name, member_id,
@@ -56,7 +56,8 @@ from .planning import SECTIONS, SEED_BITS, TOP_LEVEL, apply_paths, build_scene, 
 from .read import NO_INTEGER, UNREADABLE, member_scene, member_status, open_ensemble, open_member
 from .running import run
 from .spec import Builder, Member, Study, Sweep, SweepResult
-from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind, write_member_table
+from .members_table import write_member_table
+from .store import MEMBERS, SWAP_TAG, is_ensemble, member_path, store_kind
 from .study import STUDY_KEYS, load_study, run_study
 
 __all__ = ["Builder", "Sweep", "Study", "Member", "SweepResult", "load_study", "plan", "run",

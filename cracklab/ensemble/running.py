@@ -19,7 +19,8 @@ from .planning import as_sweep, build_scene, check_paths, check_section_keys, pl
 from .spec import Builder, Member, Sweep, SweepResult
 from .store import (MEMBERS, SWAP_TAG, check_store, damage_of, error_line, init_store, is_complete,
                     member_attrs, member_path, open_group, record_failure, store_str, swap_in,
-                    traceback_summary, write_member_table)
+                    traceback_summary)
+from .members_table import write_member_table
 
 
 def cores() -> int:

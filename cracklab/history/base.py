@@ -18,6 +18,10 @@ chunk=, threads=, nsteps=)``, answers ``push(x, out=None, scale=None)`` with S_n
 """
 from __future__ import annotations
 
+#: steps the compiled loop of the exponential engine advances its states at once, and the
+#: direct taps every mode keeps at least (exponential.py, blocked.py)
+BLOCK = 8
+
 #: {name: engine class}, in the order the classes registered (history.ENGINES sorts them)
 REGISTRY: dict = {}
 

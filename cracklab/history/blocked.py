@@ -36,7 +36,7 @@ import numba
 
 # BLOCK: steps per call of advance (every ring holds at least this many inputs; the eight
 # steps are written out below)
-from .exponential import _BLOCK as BLOCK
+from .base import BLOCK
 
 if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
     raise ImportError(f"cracklab.history.blocked is written for blocks of 8 steps, not {BLOCK}")

@@ -5,7 +5,9 @@ import math
 
 import numpy as np
 
-from ..solver.weights import convolution_weights
+from ..elastic.modes import gammas_sample, mode_gamma, modes
+from ..elastic.weights import convolution_weights
+from ..limits import MAX_STEPS
 from .base import register
 
 #: doubles of temporaries per weight while exact weights are computed (measured: the
@@ -30,7 +32,7 @@ class DirectEngine:
 
     ``gamma`` holds q c_s dt for each mode (any shape); the weights are those of
     Eqs. (45)-(47) for the given kernel, rule and formulation (or, with rule "product",
-    the product-integration weights of cracklab.solver.weights.product_weights), shifted by ``lag``
+    the product-integration weights of cracklab.elastic.weights.product_weights), shifted by ``lag``
     (lag = 1 gives sum_{j>=1} w_j x_{n-j} when x_{n-1} is pushed at step n).
     ``window`` truncates the history at T = q c_s t <= window (None: untruncated).
 
@@ -49,8 +51,6 @@ class DirectEngine:
     def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
         """(bytes held, extra bytes while it grows) of one direct engine of a half space of
         ``material`` over a run of ``scene`` (its window's length, if shorter)."""
-        from ..solver.budget import gammas_sample, modes
-        from ..solver.stability import mode_gamma
         from .tables import max_bytes
 
         grid = scene.grid
@@ -84,8 +84,6 @@ class DirectEngine:
         self.cap = None
         positive = self.gamma[self.gamma > 0]
         if window is not None and positive.size:
-            from ..model.scene import MAX_STEPS
-
             # steps until the mode of smallest gamma reaches T = window; a window longer
             # than the run (or than any run) truncates no buffer: the whole history is kept
             # (grown as the run goes, as without a window), and the weights of every mode
@@ -198,7 +196,7 @@ class DirectEngine:
 
         Tabulated ``chunk`` values of n at a time per distinct gamma, so that consecutive
         steps evaluate no kernel."""
-        from ..solver.weights import product_weights
+        from ..elastic.weights import product_weights
 
         tab = getattr(self, "_e0tab", None)
         if tab is None or not tab[0] <= n < tab[0] + tab[1].shape[0]:

@@ -1,6 +1,6 @@
 """Exponential-sum history engine: cost and memory per mode independent of the run length.
 
-The kernel K (C or Z, see :mod:`cracklab.solver.weights`) is represented, for T = q c_s t in
+The kernel K (C or Z, see :mod:`cracklab.elastic.weights`) is represented, for T = q c_s t in
 [T0, T_end], by ``K(T) ~ 2 Re sum_p c_p exp(lambda_p T)`` (conjugate pairs, Re lambda_p < 0,
 absolute error <= 1e-5 of the kernel's scale (5e-6 for mode II); :mod:`cracklab.history.fit`).
 T0 = ``ENGINE_T0`` = 4; T_end covers the run (gamma_max times its number of steps, rounded up
@@ -9,8 +9,8 @@ truncated inside the run.  For a mode with gamma = q c_s dt the weights split at
 J0 = ceil(T0 / gamma) (+1 for the product rule, whose weight w_k reaches back to (k - 1) gamma;
 rounded up to a small set of levels, and >= lag + 1):
 
-* k = j + lag < J0: the exact weights (:func:`cracklab.solver.weights.convolution_weights`, or
-  :func:`cracklab.solver.weights.product_weights`) against a ring buffer of the mode's recent values
+* k = j + lag < J0: the exact weights (:func:`cracklab.elastic.weights.convolution_weights`, or
+  :func:`cracklab.elastic.weights.product_weights`) against a ring buffer of the mode's recent values
   ("direct taps");
 * k >= J0: the weight of the rule applied to the fitted kernel,
   ``w_k = 2 Re sum_p c_p f_p rho_p^(k - shift)`` with ``rho_p = exp(lambda_p gamma)`` and the
@@ -47,10 +47,11 @@ import time
 import numpy as np
 
 from ..errors import InputError
-from ..solver.kernels import FACE_KERNELS
-from ..solver.weights import FORMULATIONS, RULES, convolution_weights, product_taps
+from ..elastic.kernels import FACE_KERNELS
+from ..elastic.modes import gammas_sample, mode_gamma, modes
+from ..elastic.weights import FORMULATIONS, RULES, convolution_weights, product_taps
 from . import tables
-from .base import register
+from .base import BLOCK as _BLOCK, register
 from .direct import deliver
 from .fit import DEFAULT_T0, get_fit
 
@@ -62,8 +63,6 @@ _LEVELS = np.array(sorted({1, 2, 3, 4, 5, 6, 7, 8} | {int(round(2 ** (k / 4))) f
 _RESYNC = 512
 #: start of the fitted representation used by the engine (exact taps for T < ENGINE_T0)
 ENGINE_T0 = 4.0
-#: steps the compiled loop advances the states at once, and taps it keeps at least (blocked.py)
-_BLOCK = 8
 _SUPPORTED_RULES = ("discretized", "trapezoid", "simpson", "exact", "product")  # recompute the powers of weight() exactly every so many calls
 
 
@@ -129,10 +128,10 @@ def _start_factor(z):
 
 def exact_weights(kernel, g, k, *, nu, rule, formulation, part="lag"):
     """The exact weights w_k (or, with part "start0", the product rule's E_0(k)) of the engine's
-    direct taps: :func:`cracklab.solver.weights.product_weights` (order 1) for the product rule,
-    :func:`cracklab.solver.weights.convolution_weights` otherwise."""
+    direct taps: :func:`cracklab.elastic.weights.product_weights` (order 1) for the product rule,
+    :func:`cracklab.elastic.weights.convolution_weights` otherwise."""
     if rule == "product":
-        from ..solver.weights import product_weights
+        from ..elastic.weights import product_weights
 
         return product_weights(kernel, g, np.asarray(k, dtype=np.int64), nu=nu, order=1, part=part)
     return convolution_weights(kernel, g, k, nu=nu, rule=rule, formulation=formulation)
@@ -245,9 +244,6 @@ class ExponentialEngine:
     def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
         """(bytes held, extra bytes while it is built) of one exponential engine (numba
         backend) of a half space of ``material`` over a run of ``scene``."""
-        from ..solver.budget import gammas_sample, modes
-        from ..solver.stability import mode_gamma
-
         grid = scene.grid
         M = modes(grid)
         g, weight = gammas_sample(grid, scene.dt, material.cs)

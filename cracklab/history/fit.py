@@ -75,8 +75,8 @@ from pathlib import Path
 import numpy as np
 from scipy import special as sp
 
-from ..solver import cuts as _cuts
-from ..solver import kernels as _k
+from ..elastic import cuts as _cuts
+from ..elastic import kernels as _k
 
 __all__ = [
     "ExpFit",

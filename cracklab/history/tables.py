@@ -49,11 +49,11 @@ def digest(a) -> str:
 def _compute(kernel, gamma, j0, j1, nu, rule, formulation):
     j = np.arange(j0, j1)[:, None]
     if rule == "product":
-        from ..solver.weights import product_weights
+        from ..elastic.weights import product_weights
 
         w = product_weights(kernel, gamma[None, :], j, nu=nu, order=1, part="lag")
     else:
-        from ..solver.weights import convolution_weights
+        from ..elastic.weights import convolution_weights
 
         w = convolution_weights(kernel, gamma[None, :], j, nu=nu, rule=rule, formulation=formulation)
     return np.ascontiguousarray(np.broadcast_to(w, (j1 - j0, gamma.size)), dtype=float)

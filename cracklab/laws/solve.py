@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..solver import loops
+from . import loops
 
 SHEAR = (1, 3)
 

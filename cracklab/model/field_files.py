@@ -340,7 +340,7 @@ def write_sidecar(scene, path, fields: dict, toml_name: str) -> None:
     netCDF file ``path`` (replaced atomically), on (x1, x3) with the grid's coordinates."""
     import xarray as xr
 
-    from .. import __version__
+    from ..version import __version__
     from .units import input_unit
 
     grid, length = scene.grid, scene.units.get("length", "1")

@@ -7,7 +7,7 @@ from functools import cached_property
 import numpy as np
 
 from ..errors import InputError, check_fields_nesting, check_positive
-from ..solver.kernels import wave_speed_ratio
+from ..elastic.kernels import wave_speed_ratio
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,7 @@ class Material:
     @cached_property
     def cR(self) -> float:
         """Rayleigh wave speed."""
-        from ..analysis.exact import rayleigh_speed_ratio
+        from ..elastic.waves import rayleigh_speed_ratio
 
         return float(rayleigh_speed_ratio(self.nu)) * self.cs
 

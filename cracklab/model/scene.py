@@ -17,12 +17,10 @@ from ..solver.interfaces import interface_type
 from ..solver.schemes import SCHEMES
 from .units import check_scene_units
 from ..solver.stability import beta_max, gamma_limit
+from ..limits import MAX_FFT_THREADS, MAX_SNAPSHOTS, MAX_STEPS  # noqa: F401  (model.scene.MAX_* as before)
 
 #: {formulation: its convolution rule}, one per time scheme (cracklab.solver.schemes)
 FORMULATIONS = {name: scheme.rule for name, scheme in SCHEMES.items()}
-MAX_FFT_THREADS = 1024
-MAX_STEPS = 10**8           # t_end / dt: more steps than this is refused before any work
-MAX_SNAPSHOTS = 10**7
 MIRROR_ROUNDOFF = 1e-12     # |tau0_3| on the lines of a free surface's mirror, relative to max |tau0_3|
 DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
 

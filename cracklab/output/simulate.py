@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from .. import __version__
+from ..version import __version__
 from . import checkpoint
 from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
 from ..model.record import face_field

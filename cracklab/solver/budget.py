@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import MemoryBudgetError
-from .stability import mode_gamma
+from ..elastic.modes import gammas_sample, modes  # noqa: F401  (budget.modes, as before)
 
 #: resident memory of a fresh process running a member (interpreter, numpy, xarray,
 #: zarr, numba, pyfftw and the compiled loops): the baseline of a sweep's worker
@@ -73,23 +73,6 @@ def parse_bytes(text) -> int:
     if not m:
         raise ValueError(f"not a size: {text!r} (give bytes, or a number with kB, MB, GB or TB)")
     return int(float(m.group(1)) * 1024 ** " kmgt".index(m.group(2) or " "))
-
-
-def modes(grid) -> int:
-    """Fourier modes of the grid's spectra (what an engine holds a history for)."""
-    s = grid.spectral_shape
-    return int(s[0]) * int(s[1])
-
-
-def gammas_sample(grid, dt, cs, limit=1 << 20):
-    """(sample of gamma = q c_s dt over the modes, weight of each sampled mode): every mode
-    for grids of up to ``limit`` modes, else a regular subsample of the two axes."""
-    k, m = grid._axes()
-    total = k.size * m.size
-    step = max(1, int(math.ceil(math.sqrt(total / limit))))
-    ks, ms = k[::step], m[::step]
-    q = np.sqrt(ks[:, None] ** 2 + ms[None, :] ** 2).ravel()
-    return mode_gamma(q, cs, dt), total / q.size
 
 
 def run_memory(scene, *, store=True) -> MemoryEstimate:

@@ -5,60 +5,29 @@ expressions, cost more in temporaries than in arithmetic (docs/performance.md):
 
 * :func:`rotate`: the shear rotation of Eq. (28) between the components (1, 3) of a mode
   and its channels (II, III), and back;
-* :func:`shear_velocity`: step (v) for the shear components, |v| = (|tau*| - S)^+ / eta
-  along tau*, and the traction tau = tau* - eta v;
 * :func:`product_predict`: the product scheme's predictor for one channel
   (cracklab.response), D, H and F of every mode in one pass;
 * :func:`shear_correct`, :func:`shear_predict`: the product scheme's corrector and
   predictor for the 3D shear channels with the rotations of Eq. (28) in the same pass;
-* :func:`normal_velocity`: step (v) for the normal component (opening rate and
-  traction, with the law's broken mask, contact and bonded points);
-* :func:`add_scaled`: y += a x in place (the slip update; the load where step (v) does not add it), and
-  :func:`plus_scaled` (x + a y), :func:`plus_mean` (y + a (x1 + x2); in place,
+* :func:`plus_scaled` (x + a y), :func:`plus_mean` (y + a (x1 + x2); in place,
   :func:`add_mean_step`),
   :func:`plus_product` (H + K V) for the product scheme's trial slips and corrector.
 
-Each is a numba loop (compiled on first use, cached on disk); without numba the callers
+Step (v)'s passes (shear_velocity, normal_velocity, add_scaled) are the laws'
+(cracklab.laws.loops; importable from here too). Each is a numba loop registered with
+cracklab.jit (compiled on first use, cached on disk); without numba the callers
 use the numpy expressions, which give the same numbers to the last bit (the same
 operations in the same order, no fast-math).
 """
 from __future__ import annotations
 
-import contextlib
-
 import numpy as np
 
-_JIT = {}
+from ..jit import available as compiled, compiled_loop as _compiled, loop, python_only  # noqa: F401
+from ..laws.loops import add_scaled, fusable_load, normal_velocity, shear_velocity  # noqa: F401
 
 
-@contextlib.contextmanager
-def python_only():
-    """Within the block, every step runs the numpy expressions instead of the compiled loops
-    (to check that the two give the same numbers)."""
-    saved = dict(_JIT)
-    _JIT.clear()
-    _JIT.update({name: None for name in _PY})
-    try:
-        yield
-    finally:
-        _JIT.clear()
-        _JIT.update(saved)
-
-
-def _compiled(name):
-    """The numba version of loop ``name`` (None without numba).  Compiled with numpy's
-    error model: a division by zero gives inf or NaN, as in the numpy expressions, instead of
-    a check per element that keeps the pass from vectorising."""
-    if name not in _JIT:
-        try:
-            import numba
-        except Exception:  # pragma: no cover
-            _JIT[name] = None
-        else:
-            _JIT[name] = numba.njit(cache=True, nogil=True, error_model="numpy")(_PY[name])
-    return _JIT[name]
-
-
+@loop("rotate")
 def _rotate_loop(c, s, a, b, sign, o1, o2):
     for i in range(c.size):
         cc = c[i]
@@ -69,27 +38,7 @@ def _rotate_loop(c, s, a, b, sign, o1, o2):
         o2[i] = cc * y - ss * x
 
 
-def _shear_loop(t1, t3, g, l1, l3, has_load, strength, scalar, eta, bonded, has_bonded, traction, v1, v3, o1, o3):
-    for i in range(t1.size):
-        a = t1[i]
-        b = t3[i]
-        if has_load:  # tau* = f + g tau0 (add_scaled)
-            a += g * l1[i]
-            b += g * l3[i]
-        mag = np.sqrt(a * a + b * b)
-        excess = mag - (strength[0] if scalar else strength[i])
-        scale = excess / (eta * mag) if (excess > 0.0 and mag > 0.0) else 0.0
-        if has_bonded and bonded[i]:
-            scale = 0.0
-        w1 = scale * a
-        w3 = scale * b
-        v1[i] = w1
-        v3[i] = w3
-        if traction:
-            o1[i] = a - eta * w1
-            o3[i] = b - eta * w3
-
-
+@loop("predict")
 def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
     for i in range(V.size):
         d = dknown[i] + dt * V[i]
@@ -99,45 +48,25 @@ def _predict_loop(V, S, e0, v0, dknown, static, pre, K, dt, H, F):
         F[i] = h + K[i] * V[i]
 
 
-def _normal_loop(t2, g, l2, has_load, strength, scalar, eta, broken, all_broken, contact, delta, dt, bonded,
-                 has_bonded, v2, o2):
-    for i in range(t2.size):
-        t = t2[i]
-        if has_load:  # tau* = f + g tau0 (add_scaled)
-            t += g * l2[i]
-        v = (t - (strength[0] if scalar else strength[i])) / eta
-        if not all_broken and not broken[i] and v < 0.0:  # np.maximum(v, 0): NaN stays NaN
-            v = 0.0
-        if contact:
-            lim = -delta[i] / dt
-            if v < lim:
-                v = lim
-        if has_bonded and bonded[i]:
-            v = 0.0
-        v2[i] = v
-        o2[i] = t - eta * v
-
-
-def _axpy_loop(y, a, x):
-    for i in range(y.size):
-        y[i] += a * x[i]
-
-
+@loop("xpay")
 def _xpay_loop(out, x, a, y):
     for i in range(out.size):
         out[i] = x[i] + a * y[i]
 
 
+@loop("plus_mean")
 def _plus_mean_loop(out, y, a, x1, x2):
     for i in range(out.size):
         out[i] = y[i] + a * (x1[i] + x2[i])
 
 
+@loop("hkv")
 def _hkv_loop(out, H, K, V):
     for i in range(out.size):
         out[i] = H[i] + K[i] * V[i]
 
 
+@loop("shear_correct")
 def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, nrm, F1, F3):
     for i in range(c.size):
         cc = c[i]
@@ -153,6 +82,7 @@ def _shear_correct_loop(c, s, X1, X3, H2, K2, H3, K3, nrm, F1, F3):
         F3[i] = (cc * f3 - ss * f2) * nrm
 
 
+@loop("shear_predict")
 def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03, v03, dk3, st3, pre3, K3, dt,
                         nrm, H2, H3, F1, F3):
     for i in range(c.size):
@@ -172,6 +102,7 @@ def _shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03,
         F3[i] = (cc * f3 - ss * f2) * nrm
 
 
+@loop("mirror_pack")
 def _mirror_pack_loop(e, o, has_e, has_o, z):
     # the doubled cell's field z (n1, 2 n3) of an even field e and an odd one o on the half
     # plane (n1, n3 + 1): z_k = e_k + o_k, z_{2 n3 - k} = e_k - o_k (o vanishes at k = 0, n3)
@@ -187,6 +118,7 @@ def _mirror_pack_loop(e, o, has_e, has_o, z):
             z[i, two - k] = x - y
 
 
+@loop("mirror_separate")
 def _mirror_separate_loop(W, has_e, has_o, E, O):
     # the doubled cell's spectrum W (n1, n3 + 1) of z = e + o -> E, O (n1//2 + 1, n3 + 1):
     # E(k) = (W(k) + conj W(-k)) / 2 (even about x3 = 0: Hermitian in k), O(k) = (W(k) - conj W(-k)) / 2
@@ -202,6 +134,7 @@ def _mirror_separate_loop(W, has_e, has_o, E, O):
                 O[k, j] = 0.5 * (w - v)
 
 
+@loop("mirror_join")
 def _mirror_join_loop(E, O, has_e, has_o, top, bottom):
     # inverse of the separation: W(k) = E(k) + O(k), W(-k) = conj(E(k) - O(k)); on the rows
     # k = 0 and n1/2 (their own conjugates) the even part's real and the odd part's imaginary
@@ -219,6 +152,7 @@ def _mirror_join_loop(E, O, has_e, has_o, top, bottom):
                 bottom[h - 1 - k, j] = (a - b).conjugate()
 
 
+@loop("mirror_split")
 def _mirror_split_loop(z, scale, has_e, has_o, e, o):
     # the half plane's even and odd parts of the doubled field z, times scale
     n1, two = z.shape
@@ -239,6 +173,7 @@ def _mirror_split_loop(z, scale, has_e, has_o, e, o):
                 o[i, k] = 0.5 * (p - q) * scale
 
 
+@loop("mirror_rotate")
 def _mirror_rotate_loop(c, s, W, o1, o2):
     # mirror_separate, then rotate (Eq. 28), in one pass: W (n1, n3 + 1) -> channels (h, n3 + 1)
     n1, m = W.shape
@@ -255,6 +190,7 @@ def _mirror_rotate_loop(c, s, W, o1, o2):
             o2[k, j] = cc * y - ss * x
 
 
+@loop("mirror_shear_correct")
 def _mirror_shear_correct_loop(c, s, W, H2, K2, H3, K3, nrm, top, bottom):
     # shear_correct with mirror_separate before it and mirror_join after it, in one pass
     n1, m = W.shape
@@ -282,6 +218,7 @@ def _mirror_shear_correct_loop(c, s, W, H2, K2, H3, K3, nrm, top, bottom):
                 bottom[h - 1 - k, j] = (g1 - g3).conjugate()
 
 
+@loop("mirror_shear_predict")
 def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S3, e03, v03, dk3, st3, pre3, K3,
                                dt, nrm, H2, H3, top, bottom):
     # shear_predict with mirror_join after it, in one pass (the channel arrays are (h, n3 + 1))
@@ -320,6 +257,7 @@ def _mirror_shear_predict_loop(c, s, V2, S2, e02, v02, dk2, st2, pre2, K2, V3, S
 _BIM_BLOCK = 256
 
 
+@loop("bim_predict")
 def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, dt, H):
     """The predictor's channel updates (modes 0 .. M-1): dknown += dt V, and each channel's
     running term H; the faces' f then follow from _bim_correct_loop with v = V."""
@@ -339,6 +277,7 @@ def _bim_predict_loop(M, V, S, e0, v0, dk, st, pre, dt, H):
                     H[a, j, i] = st[a, j, i] * dk[a, k, i] + pre[a, j, i] * (S[a, j, i] + e0[a, je, i] * v0[a, k, i])
 
 
+@loop("bim_settle")
 def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
     for k in range(3):
         for i in range(c.size):
@@ -353,6 +292,7 @@ def _bim_settle_loop(X1, X2, X3, c, s, f, em, den, v):
             v[1, k, i] = p - Vk
 
 
+@loop("bim_correct")
 def _bim_correct_loop(M, H, K, sign, v, f):
     """The faces' f = H + K v (modes 0 .. M-1) for their velocities ``v``: the predictor's V,
     or the split's (_bim_settle_loop) in the corrector."""
@@ -373,6 +313,7 @@ def _bim_correct_loop(M, H, K, sign, v, f):
                 f[a, 2, i] = sg * F[4, i - b0]
 
 
+@loop("bim_join")
 def _bim_join_loop(f, wp, wm, c, s, nrm, O1, O2, O3):
     """The interface's F = wp f+ + wm f- per part, back to components, times nrm."""
     for i in range(c.size):
@@ -386,15 +327,6 @@ def _bim_join_loop(f, wp, wm, c, s, nrm, O1, O2, O3):
         O2[i] = FN * nrm
 
 
-_PY = {"rotate": _rotate_loop, "shear": _shear_loop, "predict": _predict_loop, "normal": _normal_loop,
-       "shear_correct": _shear_correct_loop, "shear_predict": _shear_predict_loop, "axpy": _axpy_loop,
-       "xpay": _xpay_loop, "plus_mean": _plus_mean_loop, "hkv": _hkv_loop,
-       "mirror_pack": _mirror_pack_loop, "mirror_separate": _mirror_separate_loop,
-       "mirror_join": _mirror_join_loop, "mirror_split": _mirror_split_loop,
-       "mirror_rotate": _mirror_rotate_loop, "mirror_shear_correct": _mirror_shear_correct_loop,
-       "mirror_shear_predict": _mirror_shear_predict_loop, "bim_predict": _bim_predict_loop,
-       "bim_correct": _bim_correct_loop, "bim_settle": _bim_settle_loop,
-       "bim_join": _bim_join_loop}
 
 
 def rotate(c, s, a, b, inverse=False, out=None):
@@ -414,56 +346,6 @@ def rotate(c, s, a, b, inverse=False, out=None):
     return o1, o2
 
 
-def compiled() -> bool:
-    """Whether the compiled loops are available (numba imports)."""
-    return _compiled("rotate") is not None
-
-
-def _flat_strength(strength, shape):
-    """(flat strength, is scalar): one value, or the field broadcast to ``shape``."""
-    S = np.asarray(strength, dtype=float)
-    if S.size == 1:
-        return S.reshape(1), True
-    return np.ascontiguousarray(np.broadcast_to(S, shape)).ravel(), False
-
-
-def _flat_mask(mask, shape):
-    """(flat bool array, present) for an optional mask broadcast to ``shape``."""
-    if mask is None:
-        return np.zeros(1, bool), False
-    return np.ascontiguousarray(np.broadcast_to(mask, shape), dtype=bool).ravel(), True
-
-
-def _flat_load(load, comps):
-    """(g, flat tau0 of each of ``comps``, True) from load = (g, {c: tau0_c}), or (0, zeros, False)."""
-    if load is None:
-        return (0.0,) + (np.zeros(1),) * len(comps) + (False,)
-    g, fields = load
-    return (float(g),) + tuple(np.ascontiguousarray(fields[c], dtype=float).ravel() for c in comps) + (True,)
-
-
-def fusable_load(load, shape, comps) -> bool:
-    """Whether the compiled step (v) can add ``load`` = (g, {c: tau0_c}) itself: every
-    field of ``comps`` an array of ``shape``."""
-    return load is not None and all(np.shape(load[1][c]) == tuple(shape) for c in comps)
-
-
-def shear_velocity(tau1, tau3, strength, eta, bonded=None, load=None, traction=True):
-    """Step (v) in shear: v = (|tau*| - S)^+ / (eta |tau*|) tau* (zero where ``bonded``),
-    tau = tau* - eta v; returns (v1, v3, tau1, tau3) (the tractions None unless
-    ``traction``). ``strength`` is an array of the grid's shape or a scalar; ``load`` =
-    (g, {1: tau0_1, 3: tau0_3}): tau* is tau + g tau0 (arrays of tau1's shape,
-    :func:`fusable_load`), added in the pass. Needs numba
-    (:func:`compiled`); without it :func:`cracklab.laws.solve_velocity` runs the same step in numpy."""
-    S, scalar = _flat_strength(strength, tau1.shape)
-    b, has_bonded = _flat_mask(bonded, tau1.shape)
-    out = [np.empty(tau1.shape) for _ in range(4 if traction else 2)]
-    o = [a.ravel() for a in out] + ([] if traction else [np.empty(1), np.empty(1)])
-    _compiled("shear")(np.ascontiguousarray(tau1, dtype=float).ravel(), np.ascontiguousarray(tau3, dtype=float).ravel(),
-                       *_flat_load(load, (1, 3)), S, scalar, float(eta), b, has_bonded, bool(traction), *o)
-    return tuple(out) if traction else (out[0], out[1], None, None)
-
-
 def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
     """Product scheme, one channel, step n >= 2 (cracklab.response): ``dknown += dt V`` in
     place, ``H = static dknown + pre (S + e0 v0)`` and ``F = H + K V``; returns (H, F)."""
@@ -477,36 +359,6 @@ def product_predict(V, S, e0, v0, dknown, static, pre, K, dt):
       *(np.ascontiguousarray(np.broadcast_to(a, V.shape)).ravel() for a in (static, pre, K)), float(dt),
       H.ravel(), F.ravel())
     return H, F
-
-
-def normal_velocity(tau2, strength, eta, broken, contact_delta=None, dt=1.0, bonded=None, load=None):
-    """Step (v), normal component: v = (tau* - S)/eta, at least 0 where not ``broken``
-    (True: everywhere broken), at least -delta/dt with contact (``contact_delta`` = delta),
-    0 where ``bonded``; tau = tau* - eta v; ``load`` = (g, {2: tau0_2}) as in
-    :func:`shear_velocity`.  Returns (v, tau), the same numbers as the numpy expressions of
-    :func:`cracklab.laws.solve_velocity`.  Needs numba (:func:`compiled`)."""
-    S, scalar = _flat_strength(strength, tau2.shape)
-    all_broken = broken is True
-    b, _ = _flat_mask(None if all_broken else broken, tau2.shape)
-    bd, has_bonded = _flat_mask(bonded, tau2.shape)
-    contact = contact_delta is not None
-    d = np.ascontiguousarray(np.broadcast_to(contact_delta, tau2.shape), dtype=float).ravel() if contact else np.zeros(1)
-    v, tau = np.empty(tau2.shape), np.empty(tau2.shape)
-    _compiled("normal")(np.ascontiguousarray(tau2, dtype=float).ravel(), *_flat_load(load, (2,)),
-                        S, scalar, float(eta), b, all_broken,
-                        contact, d, float(dt), bd, has_bonded, v.ravel(), tau.ravel())
-    return v, tau
-
-
-def add_scaled(y, a, x):
-    """y += a x in place (y a C-contiguous float array; x of y's shape or broadcastable);
-    the same numbers as ``y += a * x``."""
-    f = _compiled("axpy")
-    if f is None or not y.flags.c_contiguous or np.shape(x) != y.shape:
-        y += a * x
-        return y
-    f(y.ravel(), float(a), np.ascontiguousarray(x, dtype=float).ravel())
-    return y
 
 
 def _same(*arrays):

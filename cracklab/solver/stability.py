@@ -20,7 +20,8 @@ and is the default whenever a shear component is active.
 """
 from __future__ import annotations
 
-from .kernels import wave_speed_ratio
+from ..elastic.kernels import wave_speed_ratio
+from ..elastic.modes import mode_gamma  # noqa: F401  (stability.mode_gamma, as before)
 from .schemes import SCHEMES as _SCHEMES
 
 GROWTH_TOLERANCE = 5e-4
@@ -30,12 +31,6 @@ SAFETY = 0.97
 
 #: formulation -> the modal scheme (formulation, convolution, integration) it steps with
 SCHEMES = {name: scheme.modal for name, scheme in _SCHEMES.items()}
-
-
-def mode_gamma(q, cs, dt):
-    """gamma = q c_s dt, the step of a Fourier mode of wavenumber ``q`` in units of its own
-    time T = q c_s t (of a material of shear wave speed ``cs``): the variable of the limits."""
-    return q * cs * dt
 
 
 NU_NODES = (-0.9, -0.825, -0.75, -0.625, -0.5, -0.375, -0.25, -0.125, 0.0, 0.025, 0.05,

@@ -235,8 +235,8 @@ def modal_run(mode, gamma, formulation, engine, T_end):
       the predicted (V = v_{n-1}) then the corrected velocity (one pass).
     """
     from cracklab.history import make_engine
-    from cracklab.solver.kernels import Z as Zk
-    from cracklab.solver.kernels import eta_hat
+    from cracklab.elastic.kernels import Z as Zk
+    from cracklab.elastic.kernels import eta_hat
     from cracklab.analysis.modal import product_weights
 
     eng_name, window = ENGINES[engine]
@@ -287,7 +287,7 @@ def ref_basis(T, mode):
     """Columns of the reference's long-time form of r(T) (the Rayleigh oscillation and the
     T^-3/2, T^-5/2 tails at the two wave speeds), whose coefficients modal_reference fits."""
     from cracklab.analysis.exact import rayleigh_speed_ratio
-    from cracklab.solver.kernels import wave_speed_ratio
+    from cracklab.elastic.kernels import wave_speed_ratio
 
     s = rayleigh_speed_ratio(NU)
     a = wave_speed_ratio(NU)

@@ -314,7 +314,7 @@ def test_kernel_tables_are_computed_once_per_process(monkeypatch):
     """A second run with the same grid and material takes every kernel table of the
     direct engine from cracklab.history.tables: no table is computed again (for the
     displacement scheme: no kernel evaluation at all)."""
-    from cracklab.solver import weights
+    from cracklab.elastic import weights
     from cracklab.history import tables
 
     calls = {"n": 0}
@@ -366,7 +366,7 @@ def test_kernel_tables_are_computed_once_per_process(monkeypatch):
 
 def test_no_monkeypatching_of_the_engine():
     from cracklab.history import direct
-    from cracklab.solver.weights import convolution_weights
+    from cracklab.elastic.weights import convolution_weights
 
     assert not hasattr(E, "share_kernel_tables")
     assert direct.convolution_weights is convolution_weights

@@ -29,7 +29,7 @@ from cracklab import Grid, Loading, Material, Numerics, Record, Scene, TractionF
 from cracklab.analysis.modal import modal_response
 from cracklab.solver.interfaces import interface
 from cracklab.solver.stability import beta_max
-from cracklab.solver.weights import convolution_weights
+from cracklab.elastic.weights import convolution_weights
 
 MAT = Material(mu=1.0, cs=1.0, nu=0.25)
 GRID3 = Grid(n1=16, n3=8, L1=1.0, L3=0.5)

@@ -25,7 +25,7 @@ from cracklab.history import ENGINES, make_engine
 from cracklab.history import fit as F
 from cracklab.history.direct import DirectEngine
 from cracklab.history.exponential import ExponentialEngine
-from cracklab.solver.weights import convolution_weights
+from cracklab.elastic.weights import convolution_weights
 
 NU = 0.25
 C_R = 0.9194017  # c_R / c_s at nu = 1/4 (ERRATA section 3)
@@ -379,7 +379,7 @@ def test_product_scheme_single_wave_at_the_50th_rayleigh_period(mode, gamma):
 @pytest.mark.parametrize("kernel", ["I", "II", "III"])
 def test_product_start_weight_against_the_exact_start_term(kernel):
     """start_weight(n), the product rule's E_0(n) on the first velocity, against
-    cracklab.solver.weights.product_weights(part="start0") (Gauss-Legendre on the closed-form Z):
+    cracklab.elastic.weights.product_weights(part="start0") (Gauss-Legendre on the closed-form Z):
     exact (1e-12) below J0 and for gamma = 0 (a constant kernel: E_0 = -Z(0)/2 for every
     n >= 1), within the fit's tolerance (1e-4 of Z(0)) beyond, over 400 consecutive calls
     (the powers are advanced by one multiplication per call)."""

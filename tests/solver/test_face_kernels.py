@@ -6,9 +6,9 @@ import pytest
 from scipy import integrate
 
 from cracklab.history import fit
-from cracklab.solver import cuts
-from cracklab.solver import face_kernels as fk
-from cracklab.solver import kernels as K
+from cracklab.elastic import cuts
+from cracklab.elastic import face_kernels as fk
+from cracklab.elastic import kernels as K
 
 NUS = (0.25, 0.1, 0.35, 0.45, -0.3)
 
@@ -151,7 +151,7 @@ def test_taylor_part_keeps_the_series():
 @pytest.mark.parametrize("lag", [0, 1, 2])
 def test_product_taps_equal_product_weights(kernel, lag):
     from cracklab.history.exponential import direct_taps
-    from cracklab.solver.weights import product_taps, product_weights
+    from cracklab.elastic.weights import product_taps, product_weights
 
     g = np.unique(np.concatenate([[0.0], np.random.default_rng(1).uniform(0.005, 0.9, 40)]))
     jd = direct_taps(g, lag, 4.0, extra=1, minimum=8)
@@ -165,7 +165,7 @@ def test_product_taps_equal_product_weights(kernel, lag):
 
 def test_product_taps_refuse_bad_input():
     from cracklab.errors import InputError
-    from cracklab.solver.weights import product_taps
+    from cracklab.elastic.weights import product_taps
 
     with pytest.raises(InputError, match="taps"):
         product_taps("H11", [0.1, 0.2], [3], 1)

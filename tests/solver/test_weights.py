@@ -7,7 +7,7 @@ import pytest
 from scipy import integrate
 
 from cracklab import kernels as K
-from cracklab.solver.weights import FORMULATIONS, RULES, convolution_weights, halves_last
+from cracklab.elastic.weights import FORMULATIONS, RULES, convolution_weights, halves_last
 
 NU = 0.25
 KERNELS = ("I", "II", "III")

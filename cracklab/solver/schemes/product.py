@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..loops import plus_mean, plus_scaled
-from ..weights import product_weights
+from ...elastic.weights import product_weights
 from .base import register
 from .velocity import Velocity, z_at_zero
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..kernels import Z as Z_kernel
+from ...elastic.kernels import Z as Z_kernel
 from ..loops import add_mean_step
 from .base import Channel, Scheme, register
 

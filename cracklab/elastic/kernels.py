@@ -50,6 +50,7 @@ __all__ = [
 ]
 
 from . import face_kernels as _face  # noqa: E402
+from .waves import wave_speed_ratio  # noqa: E402,F401  (kernels.wave_speed_ratio, as before)
 
 #: the kernels of the pair of one material (Eq. 26)
 KERNELS = ("I", "II", "III")
@@ -187,14 +188,6 @@ def _time(T):
 def _out(arr):
     arr = np.asarray(arr)
     return arr[()] if arr.ndim == 0 else arr
-
-
-def wave_speed_ratio(nu):
-    """a = c_d/c_s from Poisson's ratio: a**2 = 2(1-nu)/(1-2nu) (footnote to eq. 26)."""
-    nu = float(nu)
-    if not -1.0 < nu < 0.5:
-        raise ValueError(f"nu must satisfy -1 < nu < 0.5, got {nu}")
-    return float(np.sqrt(2.0 * (1.0 - nu) / (1.0 - 2.0 * nu)))
 
 
 def eta_hat(kernel, nu=0.25):

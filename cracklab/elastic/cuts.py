@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .waves import wave_speed_ratio
+
 H, UMIN, UMAX = 0.2, -46.0, 4.5
 
 
@@ -38,8 +40,6 @@ def density(transform, b, x, a):
 
 def quadrature(transform, nu, branch_points, h=H, umin=UMIN, umax=UMAX):
     """[(b, x_k, w_k)] per cut: g_b(T) ~ sum_k w_k exp(-x_k T)."""
-    from .kernels import wave_speed_ratio
-
     a = wave_speed_ratio(nu)
     u = np.arange(umin, umax + 0.5 * h, h)
     x = np.exp(u)

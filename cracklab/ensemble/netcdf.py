@@ -1,7 +1,5 @@
-"""netCDF4 export of a run's store, of one ensemble member or of a whole ensemble.
-
-``cracklab.ensemble`` re-exports ``export_netcdf`` and ``netcdf_ready``, so the ensemble's
-readers are imported inside the functions here (no import cycle)."""
+"""netCDF4 export of a run's store, of one ensemble member or of a whole ensemble
+(``cracklab.ensemble.export_netcdf``, ``cracklab export``)."""
 from __future__ import annotations
 
 import contextlib
@@ -16,7 +14,7 @@ from ..errors import InputError, StoreError
 def _nc_attr(value):
     """An attr value netCDF4 can hold: booleans as "true"/"false", tables and mixed lists
     as JSON text, None dropped."""
-    from ..ensemble.identity import canonical
+    from .identity import canonical
 
     if value is None:
         return None
@@ -134,7 +132,7 @@ def _cf_clean(ds):
             del var.attrs["standard_name"]
     for name, text in _parameter_units(ds).items():
         ds.variables[name].attrs["units"] = text
-    from ..ensemble.read import _with_input_coords
+    from .read import _with_input_coords
 
     ds = _with_input_coords(ds, ds.attrs.get("scene", "{}"))
     missing = {d: (d, np.arange(ds.sizes[d]), {"long_name": f"index along {d}", "units": "1"}) for d in ds.dims
@@ -187,10 +185,10 @@ def netcdf_ready(ds):
 def _read_error(store, exc) -> StoreError:
     """A StoreError naming the damaged files of ``store`` (found by ``cracklab.output.verify``)
     for an error met while reading its data."""
-    from ..ensemble.store import error_line
+    from .store import error_line
 
     if "://" not in store:
-        from .verify import verify
+        from ..output.verify import verify
 
         with contextlib.suppress(Exception):
             report = verify(store)
@@ -219,7 +217,7 @@ def _same_content(out: Path, ds) -> bool:
 def _trimmed(ds, path, allow_partial, what):
     """``ds`` (a run or a member) cut to its complete snapshots, with its RunProgress;
     a failed run raises InputError unless ``allow_partial``."""
-    from .checkpoint import run_progress
+    from ..output.checkpoint import run_progress
 
     progress = run_progress(path)
     if not ds.data_vars:
@@ -248,8 +246,8 @@ def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=Tru
 
     import xarray as xr
 
-    from ..ensemble.read import member_status, open_ensemble, open_member
-    from ..ensemble.store import member_path, store_kind, store_str
+    from .read import member_status, open_ensemble, open_member
+    from .store import member_path, store_kind, store_str
 
     store = store_str(store)
     if store_kind(store) == "ensemble":
@@ -269,7 +267,7 @@ def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=Tru
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
         if "://" not in store:
-            from .verify import check_run
+            from ..output.verify import check_run
 
             report = check_run(store, read=False)
             if not report.ok:

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from . import kernels as _k
+from .kernels import ALL_KERNELS, Z
 
 __all__ = ["RULES", "FORMULATIONS", "halves_last", "convolution_weights", "product_weights", "product_taps"]
 
@@ -154,8 +155,6 @@ def product_weights(kernel, gamma, j, *, nu=0.25, order=1, part="lag"):
     part "lag": ``W_j``; part "start0", "start1", "start2": ``E_i(n)`` at ``n = j``.
     Broadcast over ``gamma >= 0`` and integer ``j >= 0``.
     """
-    from .kernels import ALL_KERNELS
-
     if kernel not in ALL_KERNELS:
         raise InputError("kernel", f"must be one of {', '.join(map(repr, ALL_KERNELS))}; got {kernel!r}")
     nu = _poisson(nu)
@@ -212,8 +211,6 @@ def product_taps(kernel, gamma, taps, lag, *, nu=0.25):
     flat arrays (the runs one after the other) of ``product_weights(..., part="lag")`` and
     ``part="start0"`` at those (gamma, j) (the same numbers: W_j and E_0(j) share the cells
     j - 1 and j, which product_weights evaluates anew for each)."""
-    from .kernels import ALL_KERNELS
-
     if kernel not in ALL_KERNELS:
         raise InputError("kernel", f"must be one of {', '.join(map(repr, ALL_KERNELS))}; got {kernel!r}")
     nu = _poisson(nu)
@@ -246,8 +243,6 @@ def product_taps(kernel, gamma, taps, lag, *, nu=0.25):
 
 def _moments_at(kernel, g, c, nu):
     """M[p] = int_0^1 Z((c + 1 - u') g) u'^p du', p = 0..3, broadcast over g and c."""
-    from .kernels import Z
-
     T = (np.asarray(c, dtype=float)[..., None] + 1.0 - GAUSS_U) * np.asarray(g, dtype=float)[..., None]
     z = np.asarray(Z(kernel, T, nu), dtype=float) * GAUSS_W
     return np.stack([z @ GAUSS_U**p for p in range(4)])

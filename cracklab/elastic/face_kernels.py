@@ -35,6 +35,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import cuts
+from .waves import wave_speed_ratio
 
 FACE_KERNELS = ("H11", "H22", "H12")
 
@@ -43,8 +44,6 @@ _N = 64
 
 
 def _ratio(nu):
-    from .kernels import wave_speed_ratio
-
     return wave_speed_ratio(nu)
 
 

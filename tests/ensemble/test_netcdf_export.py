@@ -13,7 +13,7 @@ import xarray as xr
 import cracklab
 from cf_rules import cf_problems
 from cracklab import ensemble as E
-from cracklab.output.netcdf import export_netcdf
+from cracklab.ensemble.netcdf import export_netcdf
 
 SI = {"length": "m", "time": "s", "stress": "Pa"}
 
@@ -63,7 +63,7 @@ def test_export_is_compressed_and_cf_clean(run_store, tmp_path):
 def test_axis_t_and_standard_name_time_stay_only_on_a_time_with_a_reference_time(tmp_path):
     """CF 1.10 section 4.4: a variable with axis T or standard_name time is a time
     coordinate, whose units need a reference time; a run's elapsed t ("s", "1") loses both."""
-    from cracklab.output.netcdf import netcdf_ready
+    from cracklab.ensemble.netcdf import netcdf_ready
 
     ds = xr.Dataset({"a": (("t", "k"), np.zeros((2, 3)))},
                     coords={"t": ("t", [0.0, 1.0], {"units": "s since 2000-01-01", "standard_name": "time",

@@ -1,0 +1,3 @@
+"""The version of cracklab, readable by every layer (the package root imports everything)."""
+
+__version__ = "0.1.0"
