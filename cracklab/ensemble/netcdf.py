@@ -132,9 +132,9 @@ def _cf_clean(ds):
             del var.attrs["standard_name"]
     for name, text in _parameter_units(ds).items():
         ds.variables[name].attrs["units"] = text
-    from .read import _with_input_coords
+    from .read import with_input_coords
 
-    ds = _with_input_coords(ds, ds.attrs.get("scene", "{}"))
+    ds = with_input_coords(ds, ds.attrs.get("scene", "{}"))
     missing = {d: (d, np.arange(ds.sizes[d]), {"long_name": f"index along {d}", "units": "1"}) for d in ds.dims
                if d not in ds.coords}
     return ds.assign_coords(missing) if missing else ds

@@ -193,7 +193,7 @@ def open_ensemble(store, *, members=None, complete_only=True, tree=False):
         kept.append(s)
         scene_json = ds.attrs.get("scene", "{}")
         scenes.append(scene_json)
-        ds = _with_input_coords(ds, scene_json)
+        ds = with_input_coords(ds, scene_json)
         ds.attrs = {k: v for k, v in ds.attrs.items() if k in ("Conventions", "source", "cracklab_version")}
         datasets.append(ds)
     status = kept
@@ -253,7 +253,7 @@ def scene_text(ens, member=None) -> str:
     return ens.attrs.get("scene", "{}")
 
 
-def _with_input_coords(ds, scene_json):
+def with_input_coords(ds, scene_json):
     """Give the input_x1/input_x3 dims (full-grid scene inputs) their coordinates, in the
     scene's length unit, so that members on different grids align on them."""
     dims = [d for d in ("input_x1", "input_x3") if d in ds.dims and d not in ds.coords]

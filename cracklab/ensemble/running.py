@@ -128,9 +128,9 @@ def preflight(base_scene, members, *, fft_threads=1, sweep=None, outputs=None) -
     a dict, receives {member id: OutputEstimate} of the members built here."""
     from ..model.scene import Scene
     from ..solver.budget import run_memory
-    from ..scenes.registry import _own_builders
+    from ..scenes.registry import own_builders
 
-    own = _own_builders()
+    own = own_builders()
     out, built = {}, {}
     for m in members:
         params = dict(m.params)

@@ -22,7 +22,7 @@ REGISTERED: dict = {}          # name -> function, from register_builder
 ENTRY_POINT_CACHE: dict = {}   # (name, entry point value) -> loaded function
 
 
-def _own_builders() -> dict:
+def own_builders() -> dict:
     """cracklab's own builders: the functions of cracklab.scenes listed in BUILDERS."""
     return {name: globals()[name] for name in BUILDERS}
 
@@ -68,7 +68,7 @@ def register_builder(name, func=None, *, replace=False):
         raise InputError("builder", f"a builder name must be a non-empty string, got {name!r}")
     if not callable(func):
         raise InputError("builder", f"{name!r}: a builder must be a function returning a Scene, got {func!r}")
-    if name in _own_builders():
+    if name in own_builders():
         raise InputError("builder", f"{name!r} is one of cracklab's own builders; register yours under "
                                     f"another name")
     old = REGISTERED.get(name)
@@ -89,7 +89,7 @@ def registered_builders() -> dict:
     ``scenes.BUILDERS``), "registered" (``register_builder``), or "entry point
     <package.module:function>" (group "cracklab.builders"; an entry point does not shadow
     the others)."""
-    out = {name: "cracklab" for name in _own_builders()}
+    out = {name: "cracklab" for name in own_builders()}
     for name in REGISTERED:
         out.setdefault(name, "registered")
     for name, ep in _entry_points().items():
@@ -109,7 +109,7 @@ def builder_name(builder) -> str:
     if isinstance(builder, str):
         return builder
     if callable(builder):
-        for name, func in _own_builders().items():
+        for name, func in own_builders().items():
             if func is builder:
                 return name
         for name, func in REGISTERED.items():
@@ -133,7 +133,7 @@ def resolve_builder(name, field: str = "builder"):
     a module nor reaches another attribute of cracklab.scenes."""
     if not isinstance(name, str) or not name:
         raise InputError(field, f"must be the name of a registered scene builder, got {name!r}")
-    own = _own_builders()
+    own = own_builders()
     if name in own:
         return own[name]
     if name in REGISTERED:

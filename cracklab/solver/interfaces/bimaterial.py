@@ -29,7 +29,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..face import CHANNELS, Face
-from ..loops import _compiled, rotate
+from ...jit import compiled_loop as _compiled
+from ..loops import rotate
 from ..schemes import SCHEMES, scheme_of
 from ..spectral import Transforms
 from .base import Interface, register
