@@ -12,7 +12,7 @@ if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 import verification  # noqa: E402
 
-DOC = Path(__file__).resolve().parent.parent / "docs" / "verification.md"
+DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verification.md"
 
 # Collected in the process that runs pytest_sessionfinish (the controller under
 # pytest-xdist, which receives every report with its user_properties).

@@ -42,7 +42,7 @@ replacement), ``lock`` (the store lock), ``running`` (dask, ``run``, the worker 
 ``cracklab.analysis``;
 the netCDF export is ``cracklab.output.netcdf``.
 
-See docs/ensembles.md for the STUDY.toml format and examples.
+See docs/guide/ensembles.md for the STUDY.toml format and examples.
 """
 from ..errors import InputError, StoreError
 from ..output.netcdf import export_netcdf, netcdf_ready

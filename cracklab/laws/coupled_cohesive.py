@@ -1,4 +1,4 @@
-"""A mixed-mode linear cohesive law: modes I, II and III soften together (docs/equations.md,
+"""A mixed-mode linear cohesive law: modes I, II and III soften together (docs/reference/equations.md,
 "Coupled cohesive law")."""
 from __future__ import annotations
 

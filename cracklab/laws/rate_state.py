@@ -1,4 +1,4 @@
-"""Rate-and-state friction (docs/equations.md, "Rate-and-state friction").
+"""Rate-and-state friction (docs/reference/equations.md, "Rate-and-state friction").
 
 The regularised form of Lapusta et al. (2000) and SCEC TPV101-104: the friction
 coefficient is f(V, psi) = a asinh[V / (2 V0) exp(psi / a)] and the strength f times the

@@ -343,7 +343,7 @@ def main(argv=None) -> int:
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/<problem>.md)")
+    p.add_argument("--page", default=None, help="page to write (default docs/studies/<problem>.md)")
     p.add_argument("--reference", default=None, help="directory of the uguca reference")
     args = p.parse_args(argv)
 
@@ -384,7 +384,7 @@ def main(argv=None) -> int:
     (out / f"{problem}_results.json").write_text(json.dumps(res, indent=1, default=float))
     report(res)
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / f"{problem}.md" if args.quick else ROOT / "docs" / f"{problem}.md"))
+    page = Path(args.page or (out / f"{problem}.md" if args.quick else ROOT / "docs" / "studies" / f"{problem}.md"))
     figdir.mkdir(parents=True, exist_ok=True)
     figs = []
     if problem == "tpv101":

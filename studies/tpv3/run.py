@@ -742,7 +742,7 @@ def main(argv=None) -> int:
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv3.md)")
+    p.add_argument("--page", default=None, help="page to write (default docs/studies/tpv3.md)")
     p.add_argument("--reference", default=None, help="directory of the MDSBI station files")
     p.add_argument("--formulation", default=FORMULATION, choices=(FORMULATION, "product", "displacement"),
                    help=f"time stepping (default {FORMULATION}: tpv3's own, second order in dt); 'product' "
@@ -794,7 +794,7 @@ def main(argv=None) -> int:
         res["variants"] = {name: analyse(main_out / name, done, args.reference) for name, done in found.items()}
         (out / "tpv3_results.json").write_text(json.dumps(res, indent=1))
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv3.md" if args.quick else ROOT / "docs" / "tpv3.md"))
+    page = Path(args.page or (out / "tpv3.md" if args.quick else ROOT / "docs" / "studies" / "tpv3.md"))
     figdir.mkdir(parents=True, exist_ok=True)
     cells = {}
     for name in found:

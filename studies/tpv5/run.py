@@ -954,7 +954,7 @@ def main(argv=None) -> int:
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv5.md)")
+    p.add_argument("--page", default=None, help="page to write (default docs/studies/tpv5.md)")
     p.add_argument("--reference", default=None, help="directory of the MDSBI station files")
     p.add_argument("--beta", type=float, default=None,
                    help="time-step factor instead of the builder's: a check into OUT/beta<B>, no page")
@@ -1010,7 +1010,7 @@ def main(argv=None) -> int:
         add_variants(res, main_out, args.reference)
     (out / "tpv5_results.json").write_text(json.dumps(res, indent=1))
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv5.md" if args.quick else ROOT / "docs" / "tpv5.md"))
+    page = Path(args.page or (out / "tpv5.md" if args.quick else ROOT / "docs" / "studies" / "tpv5.md"))
     figdir.mkdir(parents=True, exist_ok=True)
     fig_stations(out, dxs, figdir, args.reference)
     fig_rupture(out, dxs, figdir)

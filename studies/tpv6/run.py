@@ -758,7 +758,7 @@ def main(argv=None) -> int:
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help="page to write (default docs/tpv6.md)")
+    p.add_argument("--page", default=None, help="page to write (default docs/studies/tpv6.md)")
     p.add_argument("--reference", default=None, help="directory of the MDSBI files")
     p.add_argument("--normal-slip-scale", type=float, default=None,
                    help="the law's normal_slip_scale L* (m): regularised normal stress (Prakash-Clifton)")
@@ -792,7 +792,7 @@ def main(argv=None) -> int:
     (out / "tpv6_results.json").write_text(json.dumps(res, indent=1))
     report(res, dxs)
     figdir = Path(args.figures or (out if args.quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / "tpv6.md" if args.quick else ROOT / "docs" / "tpv6.md"))
+    page = Path(args.page or (out / "tpv6.md" if args.quick else ROOT / "docs" / "studies" / "tpv6.md"))
     figdir.mkdir(parents=True, exist_ok=True)
     fig_stations(out, dxs, figdir, args.reference)
     fig_rupture(out, dxs, figdir, args.reference)

@@ -5,7 +5,7 @@ With tau = tau0 - eta+ v+ + f+ (top) = tau0 + eta- v- + f- (bottom) and V = v+ -
 
     tau = tau0 + f - eta V,   f = (eta- f+ + eta+ f-)/(eta+ + eta-),   eta = eta+ eta-/(eta+ + eta-),
 
-per component (docs/developer.md, "Add a half-space type"), and once V is known the faces
+per component (docs/developer/developer.md, "Add a half-space type"), and once V is known the faces
 move with
 
     v+ = [(f+ - f-) + eta- V]/(eta+ + eta-),   v- = v+ - V.
