@@ -367,6 +367,22 @@ def test_getting_started_builder_table_lists_every_builder():
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| builder | problem")]
     names = [re.match(r"\| `(\w+)\(", line).group(1) for line in tab[2:]]
     assert names == list(BUILDERS), names
+    # the arguments shown are the builder's: `k=` a required one, `k=v` its default
+    import ast
+    import inspect
+
+    from cracklab import scenes
+
+    for line in tab[2:]:
+        name, args = re.match(r"\| `(\w+)\((.*?)\)` \|", line).groups()
+        params = inspect.signature(getattr(scenes, name)).parameters
+        for arg in (a.strip() for a in re.split(r",\s*(?![^()]*\))", args) if a.strip() not in ("", "...")):
+            key, _, value = arg.partition("=")
+            assert key in params, (name, key)
+            if value:
+                assert ast.literal_eval(value) == params[key].default, (name, key, value)
+            else:
+                assert params[key].default is inspect.Parameter.empty, (name, key)
 
 
 def test_ensembles_lists_every_builder_and_the_refusal_names_them():
