@@ -35,6 +35,7 @@ SLOW = frozenset({
     "tests/cli/test_cli_manners.py",
     # killed runs resumed, in fresh processes
     "tests/output/test_resume.py::test_sigkill_mid_run_then_resume",
+    "tests/output/test_resume.py::test_sigkill_inside_a_checkpoint_write",
     "tests/output/test_store_integrity.py::test_kill_during_the_final_write_leaves_a_store_not_complete",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
@@ -49,6 +50,17 @@ SLOW = frozenset({
     "tests/solver/test_face_fields.py::test_identical_faces_in_plane_split_the_slip_and_share_the_normal_motion",
     "tests/solver/test_face_fields.py::test_faces_differ_by_the_jump_at_snapshots_and_stations",
     "tests/solver/test_product2.py::test_bimaterial_pair_runs_product2",
+    # rate-and-state runs (a Newton solve per point and step)
+    "tests/laws/test_rate_state.py::test_psi_is_recorded_by_name_with_its_unit",
+    "tests/laws/test_rate_state.py::test_following_the_normal_traction_is_the_constant_sigma_n_run",
+    "tests/laws/test_rate_state.py::test_a_resumed_run_is_the_uninterrupted_run",
+    "tests/laws/test_normal_regularisation.py::test_a_tiny_time_scale_is_the_unregularised_law",
+    "tests/laws/test_normal_regularisation.py::test_rate_state_strength_uses_sigma_eff",
+    "tests/cli/test_cli.py::test_bench_friction_laws",
+    # the budget check of a sweep, the ensemble figures through the command line, the site build
+    "tests/plots/test_plot.py::test_ensemble_figures_and_cli",
+    "tests/solver/test_budget.py::test_a_sweep_checks_every_member_before_the_cluster_starts",
+    "tests/docs/test_site.py",
 })
 
 
