@@ -9,7 +9,7 @@ Usage:
 The environment lives in .venv and is installed from environment.lock (pinned,
 hashed), then the project itself is installed editable without dependencies.
 A stamp file in .venv records the hash of environment.lock and pyproject.toml;
-the install is skipped while neither has changed. See docs/environment.md.
+the install is skipped while neither has changed. See docs/guide/environment.md.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def ensure_installed() -> None:
     if check.returncode != 0:
         sys.stderr.write(check.stdout)
         fail("`pip check` failed: environment.lock does not satisfy pyproject.toml "
-             "(regenerate it, see docs/environment.md)", check.returncode)
+             "(regenerate it, see docs/guide/environment.md)", check.returncode)
     STAMP.write_text(stamp + "\n")
     say(f"environment ready ({time.monotonic() - t0:.0f} s)")
 

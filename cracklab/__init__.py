@@ -9,7 +9,7 @@ from .version import __version__
 
 # The history engine's numba loop runs on OpenMP threads, the FFTs on FFTW's own: OpenMP
 # workers that spin after a parallel region (the GNU default) take the cores the FFTs
-# need, which made two threads slower than one (docs/performance.md).  Sleep instead,
+# need, which made two threads slower than one (docs/studies/performance.md).  Sleep instead,
 # unless the user chose otherwise; this must be set before the OpenMP runtime loads.
 _os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 

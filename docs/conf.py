@@ -4,9 +4,12 @@ Build (from the repository root, with the project's environment):
 
     .venv/bin/python -m sphinx -W -b html docs docs/_build/html
 
-The Markdown pages of docs/ are read by myst-parser and all join the site through the
-glob toctree at the end of docs/index.md; docs/reference/ is the API reference written
-by autodoc (+ napoleon) from the docstrings, in the layers of docs/tools/api_page.py;
+The Markdown pages of docs/ are read by myst-parser. They are in four folders by purpose
+(guide/, reference/, developer/, studies/), and each folder joins the site through a glob
+toctree of its own, with its caption in the sidebar, at the end of docs/index.md (a new
+page in a folder needs no edit to appear there). docs/reference/docstrings.rst is the API
+reference written by autodoc (+ napoleon) from the docstrings, in the layers of
+docs/tools/api_page.py;
 the gallery is written by sphinx-gallery from examples/*.py, which it runs while the
 site builds (into docs/gallery/, not committed). tests/docs/test_site.py builds the
 site with warnings as errors.

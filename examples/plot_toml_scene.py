@@ -2,7 +2,7 @@
 A scene written in TOML
 =======================
 
-A scene is data: the same Kostrov problem as in docs/getting_started.md, a plane
+A scene is data: the same Kostrov problem as in docs/guide/getting_started.md, a plane
 mode III crack forced to grow at 0.7 c_s from a line, written as TOML text, read
 with ``cracklab.Scene.from_toml`` and run. The slip at the centre grows as Kostrov's
 self-similar solution (``cracklab.analysis.exact.kostrov_slip``).

@@ -10,7 +10,7 @@ mode I (nu = 1/4), and gamma = q c_s dt in {0.5, 1, 2, 2.3}:
   [1000, 1100]) / 900 (the window of cracklab.stability); "overflow" when the
   recurrence overflowed before T = 2000.
 
-Prints both tables in Markdown (they are copied into docs/verification.md) and writes
+Prints both tables in Markdown (they are copied into docs/studies/verification.md) and writes
 docs/figures/modal_precision.png: the precision factor against gamma for all 12
 schemes (the counterpart of Fig. 6). Runs in well under a minute:
 

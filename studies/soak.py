@@ -1,4 +1,4 @@
-"""Soak and memory study (docs/reliability.md, "Long runs").
+"""Soak and memory study (docs/guide/reliability.md, "Long runs").
 
 One command:  nice -n 10 .venv/bin/python studies/soak.py [--quick]
 

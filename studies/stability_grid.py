@@ -1,4 +1,4 @@
-"""Stability of the full-grid schemes, stress-tested: beta from 0.1 to 1.0 (docs/stability.md).
+"""Stability of the full-grid schemes, stress-tested: beta from 0.1 to 1.0 (docs/reference/stability.md).
 
 The single-mode map (studies/stability_map.py) predicts, through cracklab.solver.stability.gamma_max
 and gamma_max = q_max c_s dt = beta q_max dx (Eq. 52), the largest stable beta of each scheme.

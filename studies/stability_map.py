@@ -1,5 +1,5 @@
 """Stability map of the single-mode (modal) time-stepping schemes, and the accuracy of the
-stable ones (docs/stability.md).
+stable ones (docs/reference/stability.md).
 
 For every scheme below, mode I, II, III (nu = 1/4) and gamma = q c_s dt in
 {0.05, 0.1, 0.2, ..., 2.6}, the unit step response r(T) of one Fourier mode is

@@ -1,5 +1,5 @@
 """Stability limit of each grid scheme and Fourier-mode kernel against Poisson's ratio
-(docs/stability.md, "Limits for every Poisson ratio"; tabulated in cracklab/solver/stability.py).
+(docs/reference/stability.md, "Limits for every Poisson ratio"; tabulated in cracklab/solver/stability.py).
 
 For each time scheme a Scene can run (displacement / trapezoid / explicit, velocity /
 discretized / semi-implicit, product / piecewise-linear / one predictor-corrector pass),

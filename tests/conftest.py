@@ -12,7 +12,69 @@ if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 import verification  # noqa: E402
 
-DOC = Path(__file__).resolve().parent.parent / "docs" / "verification.md"
+DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verification.md"
+
+# ----------------------------------------------------------------------------- slow tests
+#: The tests marked ``slow`` (the marker is registered in pyproject.toml): a test file, or a
+#: test of a file with all its parametrizations ("file::test"). Each took more than about
+#: 5 s in a measured run of the suite; `python3 bootstrap.py test -n 2 -m "not slow"` leaves
+#: them out (docs/developer/developer.md, "Running the tests"). tests/test_slow_marker.py
+#: fails when an entry names no test.
+SLOW = frozenset({
+    # full scene runs (SCEC builders on coarse grids)
+    "tests/scenes/test_tpv_rate_state.py::test_tpv101_nucleates_at_the_hypocentre_on_a_coarse_grid",
+    "tests/scenes/test_tpv_rate_state.py::test_a_coarse_half_space_run_nucleates",
+    "tests/scenes/test_tpv5.py::test_tpv5_coarse_run_starts_at_the_hypocentre_and_keeps_the_surface_free",
+    # ensembles on worker processes, killed workers and sweeps
+    "tests/ensemble/test_ensemble_faults.py::test_worker_killed_mid_member_is_retried_or_marked_failed_then_resumed",
+    "tests/ensemble/test_ensemble_faults.py::test_sweep_killed_leaves_a_stale_lock_that_the_next_sweep_takes_over",
+    "tests/ensemble/test_ensemble_faults.py::test_two_sweeps_into_one_store_the_second_is_refused",
+    "tests/ensemble/test_ensemble.py::test_failure_recorded_then_resumed_on_the_cluster",
+    "tests/ensemble/test_ensemble.py::test_cli_workers_sizes_the_embedded_local_cluster",
+    # the command line in fresh processes (each starts Python, cracklab and often dask)
+    "tests/cli/test_cli_manners.py",
+    # killed runs resumed, in fresh processes
+    "tests/output/test_resume.py::test_sigkill_mid_run_then_resume",
+    "tests/output/test_resume.py::test_sigkill_inside_a_checkpoint_write",
+    "tests/output/test_store_integrity.py::test_kill_during_the_final_write_leaves_a_store_not_complete",
+    # studies' runs and compilations in fresh processes with empty caches
+    "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
+    "tests/studies/test_regression_tools.py::test_tiny_case_is_identical_across_fresh_processes",
+    "tests/laws/test_rate_state.py::test_the_fast_pass_compiles_to_vector_code",
+    "tests/history/test_compile_order.py::test_engine_sums_do_not_depend_on_the_compile_order",
+    # big grids
+    "tests/solver/test_budget.py::test_the_estimate_agrees_with_the_peak_resident_memory",
+    # kernel fits and the bimaterial faces' tables, from empty caches
+    "tests/solver/test_face_kernels.py::test_exponential_fits_of_the_face_kernels",
+    "tests/history/test_fast_engine.py::test_cache_round_trip_and_corruption",
+    "tests/solver/test_face_fields.py::test_identical_faces_in_plane_split_the_slip_and_share_the_normal_motion",
+    "tests/solver/test_face_fields.py::test_faces_differ_by_the_jump_at_snapshots_and_stations",
+    "tests/solver/test_product2.py::test_bimaterial_pair_runs_product2",
+    # rate-and-state runs (a Newton solve per point and step)
+    "tests/laws/test_rate_state.py::test_psi_is_recorded_by_name_with_its_unit",
+    "tests/laws/test_rate_state.py::test_following_the_normal_traction_is_the_constant_sigma_n_run",
+    "tests/laws/test_rate_state.py::test_a_resumed_run_is_the_uninterrupted_run",
+    "tests/laws/test_normal_regularisation.py::test_a_tiny_time_scale_is_the_unregularised_law",
+    "tests/laws/test_normal_regularisation.py::test_rate_state_strength_uses_sigma_eff",
+    "tests/cli/test_cli.py::test_bench_friction_laws",
+    # the budget check of a sweep, the ensemble figures through the command line, the site build
+    "tests/plots/test_plot.py::test_ensemble_figures_and_cli",
+    "tests/solver/test_budget.py::test_a_sweep_checks_every_member_before_the_cluster_starts",
+    "tests/docs/test_site.py",
+})
+
+
+def is_slow(nodeid: str) -> bool:
+    """Whether a collected test's node id is listed in ``SLOW``."""
+    path, _, name = nodeid.partition("::")
+    return path in SLOW or f"{path}::{name.split('[')[0]}" in SLOW
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if is_slow(item.nodeid):
+            item.add_marker(pytest.mark.slow)
+
 
 # Collected in the process that runs pytest_sessionfinish (the controller under
 # pytest-xdist, which receives every report with its user_properties).

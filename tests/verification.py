@@ -1,13 +1,13 @@
-"""Verification registry: the rows of the table in docs/verification.md.
+"""Verification registry: the rows of the table in docs/studies/verification.md.
 
 Each row names the test that measures it, the reference solution, the measured
 quantity and its tolerance. A test ends with ``check(row_id, achieved)``, which
 records the achieved value and asserts ``achieved <= tolerance``. The tolerance lives
 here and only here: the tests take it from ``check`` and tests/docs/test_docs.py makes
-sure docs/verification.md shows the same tolerances, and achieved values within them.
+sure docs/studies/verification.md shows the same tolerances, and achieved values within them.
 
 When the suite runs with ``CRACKLAB_WRITE_VERIFICATION=1``, tests/conftest.py
-rewrites the table in docs/verification.md from the values recorded in the run
+rewrites the table in docs/studies/verification.md from the values recorded in the run
 (rows whose tests did not run keep their old values).
 
 Rows in ``OUTCOME_ROWS`` are pass/fail rows: their achieved value is the number of

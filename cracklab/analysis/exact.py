@@ -1,7 +1,7 @@
 """Exact and reference solutions used by the tests and studies.
 
 Modal response (section 3.1, eqs. 39-41, Appendix B), Lamb's problem
-(section 3.2, as corrected in docs/equations.md, "Reference solutions"), and static and
+(section 3.2, as corrected in docs/reference/equations.md, "Reference solutions"), and static and
 self-similar crack openings (the same section).
 """
 
@@ -180,7 +180,7 @@ def lamb_arrivals():
 
 
 def pekeris_G(tau):
-    """Pekeris (1955) G(tau) for nu = 1/4 (docs/equations.md, "Reference solutions": corrects the formula of section 3.2).
+    """Pekeris (1955) G(tau) for nu = 1/4 (docs/reference/equations.md, "Reference solutions": corrects the formula of section 3.2).
 
     Surface displacement under a step point load P: w = P/(pi mu r) G(tau), tau = c_s t/r.
     G = 0 before tau_P, -> -inf as tau -> tau_R-, 3/8 from tau_R on.
@@ -201,7 +201,7 @@ def pekeris_G(tau):
 def lamb_opening(r, t, P=1.0, mu=1.0, cs=1.0):
     """Opening 2w = 2P/(pi mu r) G(cs t/r) of the plane under opposite step point loads P (nu = 1/4).
 
-    docs/equations.md, "Reference solutions" (the printed section 3.2 formula is garbled); static value 3P/(4 pi mu r).
+    docs/reference/equations.md, "Reference solutions" (the printed section 3.2 formula is garbled); static value 3P/(4 pi mu r).
     """
     r = np.asarray(r, dtype=float)
     t = np.asarray(t, dtype=float)
@@ -210,7 +210,7 @@ def lamb_opening(r, t, P=1.0, mu=1.0, cs=1.0):
 
 # ----------------------------------------------------------------------------- static cracks
 def penny_opening(r, c, p, mu, nu):
-    """Penny crack of radius c under pressure p: 4(1-nu)p/(pi mu) sqrt(c^2-r^2), 0 outside (docs/equations.md, "Reference solutions")."""
+    """Penny crack of radius c under pressure p: 4(1-nu)p/(pi mu) sqrt(c^2-r^2), 0 outside (docs/reference/equations.md, "Reference solutions")."""
     r = np.asarray(r, dtype=float)
     return _out(4.0 * (1.0 - nu) * p / (math.pi * mu) * np.sqrt(np.clip(c * c - r * r, 0.0, None)))
 
@@ -229,7 +229,7 @@ def griffith_opening(x, c, p, mu, nu, mode="I"):
 
 
 def periodic_row_opening(x, c, L, p, mu, nu, mode="I"):
-    """Periodic row (period L) of cracks |x - nL| < c under load p (docs/equations.md, "Reference solutions").
+    """Periodic row (period L) of cracks |x - nL| < c under load p (docs/reference/equations.md, "Reference solutions").
 
     (f p/mu)(L/pi) arccosh(cos(pi x/L)/cos(pi c/L)) with x reduced to [-L/2, L/2),
     f = 2(1-nu) for modes I, II and 2 for mode III; 0 outside the cracks.

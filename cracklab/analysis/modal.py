@@ -59,7 +59,7 @@ gamma = 0.5, for 0 < gamma <~ 2.2, and decay at 2.3.  Only the trapezoid
 pre-integration (46) adds enough damping for displacement/trapezoid/explicit to
 decay for all gamma <= 2.3; it blows up from about 2.35.
 
-Product integration and predictor-corrector (docs/stability.md).  The schemes above
+Product integration and predictor-corrector (docs/reference/stability.md).  The schemes above
 let the mode II Rayleigh oscillation grow (about 9.3e-3 gamma^2 per unit T for the
 default displacement/trapezoid/explicit scheme): sampling ``I = int_0^T C``, whose slope
 jumps to C(0) at T = 0, and the trapezoid pre-integration each shift the discrete
@@ -123,7 +123,7 @@ MAX_STEPS = 200_000
 PRODUCT_CONVOLUTIONS = ("product", "product-cubic")
 _ALL_CONVOLUTIONS = CONVOLUTIONS + ("exact",) + PRODUCT_CONVOLUTIONS
 _ALL_INTEGRATIONS = INTEGRATIONS + ("predictor-corrector",)
-#: the most accurate scheme of the single-mode study that does not grow (docs/stability.md):
+#: the most accurate scheme of the single-mode study that does not grow (docs/reference/stability.md):
 #: velocity formulation, product integration of Z against the piecewise-cubic velocity, and
 #: one predictor-corrector pass of the semi-implicit update (50); the grid's "product"
 #: formulation is its piecewise-linear variant ("velocity", "product", "predictor-corrector")
@@ -474,7 +474,7 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
     corrector_passes : int >= 1
         Corrector passes of the predictor-corrector integration (1: PECE).  Ignored
         by the other integrations.  Two passes are less stable than one (mode II
-        grows from gamma ~ 2; docs/stability.md).
+        grows from gamma ~ 2; docs/reference/stability.md).
 
     Returns
     -------
@@ -487,7 +487,7 @@ def modal_response(mode, *, gamma, T_end, nu=0.25, formulation="displacement",
     The grid's product scheme is (velocity, product, predictor-corrector, one pass):
     second order, and its single-mode response does not grow for modes I, II, III up
     to gamma = 2.5. :data:`STABLE_SCHEME` is its piecewise-cubic variant (fourth order,
-    up to gamma = 2.6), which runs here only (docs/stability.md).
+    up to gamma = 2.6), which runs here only (docs/reference/stability.md).
     """
     mode = _choice("mode", mode, MODES)
     gamma = _positive("gamma", gamma)
@@ -627,7 +627,7 @@ def envelope_growth(r, *, t0=None) -> float:
     of ln(max |r| per period) against T over [t0, T_end] (default t0 = T_end / 2), the
     period being that of the long-time oscillation (2 pi / s_R for modes I and II, 2 pi for
     mode III); for mode III, |r| sqrt(T), the rate relative to the T^-1/2 decay of J0.
-    inf when the response overflowed. The measure of docs/stability.md."""
+    inf when the response overflowed. The measure of docs/reference/stability.md."""
     mode, nu = r.attrs["mode"], r.attrs["nu"]
     T, y = r["T"].values, np.abs(r.values)
     if not np.all(np.isfinite(y)):

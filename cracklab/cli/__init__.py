@@ -11,7 +11,7 @@ to the group ``main`` of ``common`` (with the helpers the commands share); ``ben
 ``demo`` run the bench and the demonstration.
 """
 from .common import CONTEXT, INTERRUPTED, fail, main
-# the commands, in the order main.commands lists them (docs/api.md)
+# the commands, in the order main.commands lists them (docs/reference/api.md)
 from .cmd_demo import demo
 from .cmd_run import RUN_FLAGS, run
 from .cmd_sweep import SWEEP_FLAGS, sweep

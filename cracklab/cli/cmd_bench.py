@@ -47,11 +47,11 @@ BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3"
 @click.option("--free-surface", is_flag=True,
               help="The half plane of n1 x (n3 + 1) nodes below a free surface on x3 = 0 (mirror symmetry, "
                    "Grid(free_surface=True)); to set against the periodic n1 x n3 grid and the doubled "
-                   "n1 x 2 n3 one (docs/performance.md, 'Free surface by mirror symmetry').")
+                   "n1 x 2 n3 one (docs/studies/performance.md, 'Free surface by mirror symmetry').")
 @click.option("--bimaterial", is_flag=True,
               help="A bottom half space of another material (mu 0.6, c_s 0.8 times the top's, nu 0.3; the "
                    "product scheme): to set against the same bench of one material "
-                   "(docs/performance.md, 'Bimaterial interface').")
+                   "(docs/studies/performance.md, 'Bimaterial interface').")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 @click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
               help="Also write the result as one JSON object to this file.")

@@ -38,7 +38,7 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
                    "code: it names only registered builders.")
 def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no_memory_check, progress,
           imports) -> None:
-    """Run the ensemble of STUDY (a STUDY.toml, see docs/ensembles.md) into OUTPUT.
+    """Run the ensemble of STUDY (a STUDY.toml, see docs/guide/ensembles.md) into OUTPUT.
 
     Every member's scene paths and parameter types are checked, and its memory estimated,
     before any worker starts. Exits with status 1 when a member failed (the failures are

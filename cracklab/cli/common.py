@@ -50,7 +50,7 @@ def _read_toml(path: str, what: str) -> dict:
 
     data = read_toml_file(path)
     if not data:
-        raise InputError(path, f"is empty: no TOML tables or keys (expected {what}; see docs/getting_started.md)")
+        raise InputError(path, f"is empty: no TOML tables or keys (expected {what}; see docs/guide/getting_started.md)")
     return data
 
 

@@ -1,5 +1,5 @@
 """Kernels of one half space's face: its traction from its own face displacement (the
-independent formulation of docs/equations.md, "One half space: Eqs. (20)-(22)").
+independent formulation of docs/reference/equations.md, "One half space: Eqs. (20)-(22)").
 
 For the upper half space x2 > 0 and one Fourier mode, in the frame of the wave vector
 (L along q, N = 2 normal, T transverse; T = q c_s t and s = p/(q c_s) dimensionless,

@@ -1,7 +1,7 @@
 """Convolution kernels of the spectral boundary-integral formulation.
 
 Geubelle & Rice (1995), eq. (26) and Appendix A, with the correction of the
-mode II kernel (docs/equations.md, "Convolution kernels: Eq. (26), C_II (corrected)").  Time is dimensionless,
+mode II kernel (docs/reference/equations.md, "Convolution kernels: Eq. (26), C_II (corrected)").  Time is dimensionless,
 ``T = q c_s t``; ``a = c_d / c_s`` with ``a**2 = 2 (1 - nu) / (1 - 2 nu)``.
 
 Everything is closed form in Bessel functions (``scipy.special`` only).  The
@@ -225,7 +225,7 @@ def C_I(T, nu=0.25):
 
 
 def C_II(T, nu=0.25):
-    """Mode II (in-plane shear) kernel C_II(T), eq. (26) with the correction -(4/a) J0(aT) (docs/equations.md).
+    """Mode II (in-plane shear) kernel C_II(T), eq. (26) with the correction -(4/a) J0(aT) (docs/reference/equations.md).
 
     Rewritten with g(x) = J0(x) - x W(x):
     C_II = J1(T)/T + 4 g(T) - J0(T) - (4/a) g(aT).
@@ -366,7 +366,7 @@ def Z_integral(kernel, T, nu=0.25):
 
 
 def laplace(kernel, s, nu=0.25):
-    """Laplace transform in T of C_kernel at (complex) s, Appendix A as corrected in docs/equations.md ("Laplace transforms").
+    """Laplace transform in T of C_kernel at (complex) s, Appendix A as corrected in docs/reference/equations.md ("Laplace transforms").
 
     With R = 4 sqrt(1+s^2/a^2) sqrt(1+s^2) - (2+s^2)^2 (principal roots):
     L[C_I] = -R/(s^2 sqrt(1+s^2/a^2)) - a s, L[C_II] = -R/(s^2 sqrt(1+s^2)) - s,

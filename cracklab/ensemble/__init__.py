@@ -43,7 +43,7 @@ the builder registry is ``cracklab.scenes.registry``;
 ``cracklab.analysis``;
 the netCDF export is ``cracklab.ensemble.netcdf``.
 
-See docs/ensembles.md for the STUDY.toml format and examples.
+See docs/guide/ensembles.md for the STUDY.toml format and examples.
 """
 from ..errors import InputError, StoreError
 from .netcdf import export_netcdf, netcdf_ready

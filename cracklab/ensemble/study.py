@@ -27,7 +27,7 @@ STUDY_KEYS = ("name", "builder", "scene", "entropy", "replicates", "seed_arg", "
 
 
 def load_study(path) -> Study:
-    """Read a STUDY.toml (see docs/ensembles.md)::
+    """Read a STUDY.toml (see docs/guide/ensembles.md)::
 
         [study]
         name = "asperity_ensemble"

@@ -1,4 +1,4 @@
-"""The history-engine protocol (docs/developer.md, "Layers"): an engine is a class
+"""The history-engine protocol (docs/developer/developer.md, "Layers"): an engine is a class
 registered with :func:`register` under its ``name`` (a value of ``Numerics.engine``); every
 module of this package is imported (``history.ENGINES``), so that a new engine is one file.
 

@@ -16,7 +16,7 @@ rounded up to a small set of levels, and >= lag + 1):
   ``w_k = 2 Re sum_p c_p f_p rho_p^(k - shift)`` with ``rho_p = exp(lambda_p gamma)`` and the
   rule factor f_p (discretized 1, trapezoid (1 + rho)/2, Simpson, exact (rho - 1)/(lambda gamma),
   product ((rho - 1)/(lambda gamma))^2 with shift 1), i.e. eqs. (45)-(47) (or the product
-  integration of docs/stability.md) applied to each exponential exactly.  The tail sum is
+  integration of docs/reference/stability.md) applied to each exponential exactly.  The tail sum is
   carried by one complex state per term and per real input (Re x and Im x):
   ``s_p(n) = rho_p s_p(n-1) + x_{n-Jd}``, ``S_tail = Re sum_p e_p s_p``.
 
@@ -25,7 +25,7 @@ Backends (``CRACKLAB_EXP_BACKEND``): "numba" (default) runs the compiled loops o
 of a mode can be advanced 8 steps at a time from inputs already in its ring (one eighth
 of the modes per step, staggered), their tail sums kept for the next 8 steps; "numpy"
 runs the per-step recursion vectorised over the modes.  Both give the same sums to
-round-off (docs/fast_engine.md).  The numba backend with two or more threads overlaps:
+round-off (docs/reference/fast_engine.md).  The numba backend with two or more threads overlaps:
 push leaves the next step's advance due, :meth:`ExponentialEngine.launch` starts it on a
 worker thread, and the caller's transforms and interface law run meanwhile (the next push
 waits for it; the same numbers to the bit, ``CRACKLAB_OVERLAP=0`` switches it off).  The product
@@ -33,7 +33,7 @@ rule's start term E_0(n) (on the first velocity) is exact for n < J0 and fitted 
 
 Memory per mode is fixed at construction (2 P complex states, Jd >= 8 buffered values and
 tap weights, 8 tail sums).  Modes with gamma = 0 (q = 0) get exact weights K(0) for all k (a running sum).
-See docs/fast_engine.md.
+See docs/reference/fast_engine.md.
 
 ``window`` (a truncated history) is not supported: the engine keeps the whole history by
 construction; use the direct engine for windowed runs.
@@ -297,7 +297,7 @@ class ExponentialEngine:
         # velocity-based schemes, whose caller does two transforms or more per pushed channel
         # besides the law: the caller's thread is the longer one there; the displacement
         # scheme's one transform pair per push is about as long as the advance, so its taps
-        # stay with the caller (docs/performance.md)
+        # stay with the caller (docs/studies/performance.md)
         self.taps_ahead = formulation != "displacement"
         self._pending = None  # the worker's advance (a Future)
         self._due = None      # the step whose advance push left for launch()
@@ -436,7 +436,7 @@ class ExponentialEngine:
         self._lstart[lm] = lstart
         # the recursion factors and coefficients of every mode (not per distinct gamma): advance
         # then streams every array in order; a table per gamma, read in the modes' order, costs
-        # a cache line per mode and array (docs/fast_engine.md)
+        # a cache line per mode and array (docs/reference/fast_engine.md)
         self._rr, self._ri = (np.ascontiguousarray(a[inv]) for a in (rho_u.real, rho_u.imag))
         self._er, self._ei = (np.ascontiguousarray(a[inv]) for a in (e_u.real, e_u.imag))
         self._states = [np.zeros((m, self.pairs)) for _ in range(4)]  # Re and Im of s_p for Re x, then Im x

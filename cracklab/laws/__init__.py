@@ -1,7 +1,7 @@
 """Interface laws: the strength of the plane and how it evolves (Eq. 38, Fig. 4).
 
 One law per module, each a frozen dataclass deriving from :class:`base.Law` (the
-protocol: docs/developer.md, "Add a law"). A law registers by its TOML name ``kind``:
+protocol: docs/developer/developer.md, "Add a law"). A law registers by its TOML name ``kind``:
 every module of this package is imported, and each Law subclass with a ``kind`` found in
 them is in :data:`LAWS`, so that adding a law is one file.
 """

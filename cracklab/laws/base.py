@@ -1,9 +1,9 @@
-"""The interface-law protocol (docs/developer.md, "Add a law").
+"""The interface-law protocol (docs/developer/developer.md, "Add a law").
 
 A law is a frozen dataclass of its parameters that derives from :class:`Law`:
 
 * class attributes: ``kind`` (its TOML name, by which it registers), ``example`` (a small
-  TOML scene of the law, which docs/toml.md shows), ``components``
+  TOML scene of the law, which docs/reference/toml.md shows), ``components``
   (the components it acts on: NORMAL, SHEAR or ALL), ``reads_slip`` (whether ``update``
   reads the slip), ``state_variables`` ({name: (long_name, unit)}: what of its state the
   recorder can record by name);
@@ -43,7 +43,7 @@ KINDS = ("field", "mask", "scalar", "option")
 
 #: the accepted ranges a number or field parameter declares (``parameter(accepted=...)``,
 #: optionally followed by "; " and a condition that involves other keys), every value of a
-#: field in it: what docs/toml.md shows, and what tests/docs/test_toml_page.py holds the
+#: field in it: what docs/reference/toml.md shows, and what tests/docs/test_toml_page.py holds the
 #: law's own checks to
 RANGES = ("> 0", ">= 0", ">= 0 or inf", "finite")
 
@@ -53,7 +53,7 @@ def parameter(*, unit: str = "1", kind: str = "field", default=dataclasses.MISSI
     """A law parameter: a dataclass field that carries its unit and kind (see module doc),
     its accepted range (one of :data:`RANGES` for a number or a field, then optionally "; "
     and a condition on other keys; free text for an option; None for a mask) and a
-    one-line meaning ``doc`` (both for docs/toml.md)."""
+    one-line meaning ``doc`` (both for docs/reference/toml.md)."""
     if unit not in UNITS or kind not in KINDS:
         raise ValueError(f"unit must be one of {UNITS} and kind one of {KINDS}, got {unit!r}, {kind!r}")
     if kind in ("field", "scalar") and (accepted or "").split(";")[0] not in RANGES:
@@ -147,7 +147,7 @@ class Law:
         nesting of its values is checked before them)."""
 
     kind = ""
-    #: a small, valid TOML scene of the law (docs/toml.md shows it under the law,
+    #: a small, valid TOML scene of the law (docs/reference/toml.md shows it under the law,
     #: tests/docs/test_toml_page.py runs it; docs/tools/toml_page.py stops without one)
     example = ""
     components = ALL
@@ -214,7 +214,7 @@ class Law:
 
 
 def parameter_docs(cls) -> dict:
-    """{name: (unit, kind, accepted, doc)} of a law class's parameters (docs/toml.md)."""
+    """{name: (unit, kind, accepted, doc)} of a law class's parameters (docs/reference/toml.md)."""
     return {f.name: (f.metadata.get("unit", "1"), f.metadata.get("kind", "option"), f.metadata.get("accepted"),
                      f.metadata.get("doc", "")) for f in dataclasses.fields(cls)}
 

@@ -23,7 +23,7 @@ class ConstantFriction(Friction):
     normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "constant_friction"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # Coulomb friction that follows the normal traction (no sigma_n), in the plane
 # problem: pressed by tau0_2 = -1, the plane slides where tau0_1 > mu_f = 0.6

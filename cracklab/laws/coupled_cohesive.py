@@ -1,4 +1,4 @@
-"""A mixed-mode linear cohesive law: modes I, II and III soften together (docs/equations.md,
+"""A mixed-mode linear cohesive law: modes I, II and III soften together (docs/reference/equations.md,
 "Coupled cohesive law")."""
 from __future__ import annotations
 
@@ -35,7 +35,7 @@ class CoupledCohesive(Law):
     reads_slip = True
     contact = True
     kind = "coupled_cohesive"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # Modes I and II softening together in the plane problem: a crack of nodes 0-2
 # and 13-15 (across the periodic boundary) under a mixed, ramped load

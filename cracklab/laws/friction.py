@@ -1,6 +1,6 @@
 """What every friction law shares: its strength is a friction coefficient times the
 compressive normal stress, either the constant parameter ``sigma_n`` or, when a law is
-given no ``sigma_n``, the normal traction of the current step (docs/equations.md,
+given no ``sigma_n``, the normal traction of the current step (docs/reference/equations.md,
 "Friction that follows the normal traction").
 
 A friction law derives from :class:`Friction` and writes ``coefficient(state, t, grid)``
@@ -20,7 +20,7 @@ with the slip scale L* = ``normal_slip_scale`` and the time scale t* = ``normal_
 (either or both; Rubin & Ampuero's (|V| + V*)/L* is both, with V* = L*/t*). Over a step the
 ODE is integrated exactly for the slip rate V_{n-1} at the step's start and the step's
 sigma_n: sigma*_n = sigma_n + (sigma*_{n-1} - sigma_n) exp(-(|V_{n-1}| / L* + 1 / t*) dt),
-and sigma*_0 = sigma_0 (docs/equations.md, "Regularised normal stress"). sigma* is the law
+and sigma*_0 = sigma_0 (docs/reference/equations.md, "Regularised normal stress"). sigma* is the law
 state ``sigma_eff`` (recordable).
 """
 from __future__ import annotations

@@ -25,7 +25,7 @@ class LinearCohesive(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = True  # its update reads delta
     kind = "linear_cohesive"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # A mode I crack in the plane problem: nodes 0-2 and 13-15 (the crack across the
 # periodic boundary) broken at t = 0, the plane under a suddenly applied tension

@@ -32,7 +32,7 @@ class PrescribedRupture(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "prescribed_rupture"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # Kostrov's crack: the strength drops from infinity to 0 as a circle growing at
 # 0.7 cs from the centre passes, over 0.05 time units

@@ -1,4 +1,4 @@
-"""Rate-and-state friction (docs/equations.md, "Rate-and-state friction").
+"""Rate-and-state friction (docs/reference/equations.md, "Rate-and-state friction").
 
 The regularised form of Lapusta et al. (2000) and SCEC TPV101-104: the friction
 coefficient is f(V, psi) = a asinh[V / (2 V0) exp(psi / a)] and the strength f times the
@@ -529,7 +529,7 @@ class RateState(Friction):
     normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "rate_state"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # TPV101 on a coarse grid (600 m): ageing law, sliding at 1e-12 m/s under 75 MPa,
 # nucleated by a 25 MPa patch of radius 3 km that grows over 1 s

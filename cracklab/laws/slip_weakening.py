@@ -31,7 +31,7 @@ class SlipWeakening(Friction):
     normal_time: float | np.ndarray | None = normal_time()
     bonded: np.ndarray | None = bonded_mask()
     kind = "slip_weakening"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # A TPV3-like fault on a coarse grid (about 470 m): slip weakening under 120 MPa,
 # nucleated from t = 0 by a shear stress raised up to 30 MPa within 3 km

@@ -18,7 +18,7 @@ class TractionFree(Law):
     bonded: np.ndarray | None = bonded_mask()
     reads_slip = False  # its update does not read delta (the product scheme then skips its trial slips)
     kind = "traction_free"
-    #: a small scene of the law (docs/toml.md shows it, tests/docs/test_toml_page.py runs it)
+    #: a small scene of the law (docs/reference/toml.md shows it, tests/docs/test_toml_page.py runs it)
     example = """\
 # A traction-free plane under a uniform step of tension: it opens everywhere,
 # at the rate 2 cs tau0_2 / (mu a) (the radiation damping of mode I)

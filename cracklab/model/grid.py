@@ -52,7 +52,7 @@ class Grid:
     (and so, by the period 2 L3, about x3 = L3 too): delta_1, delta_2, tau_1, tau_2 even,
     delta_3, tau_3 odd (zero on both lines). Every field has the shape (n1, n3 + 1);
     the transforms are cosine (even) and sine (odd) transforms along x3 and a real FFT
-    along x1 (solver/spectral.py, docs/equations.md "A free surface by mirror symmetry").
+    along x1 (solver/spectral.py, docs/reference/equations.md "A free surface by mirror symmetry").
     """
 
     n1: int
@@ -104,10 +104,12 @@ class Grid:
 
     @property
     def dx1(self) -> float:
+        """Node spacing L1/n1."""
         return self.L1 / self.n1
 
     @property
     def dx3(self) -> float:
+        """Node spacing L3/n3."""
         return self.L3 / self.n3
 
     @property
@@ -116,6 +118,7 @@ class Grid:
 
     @property
     def x1(self) -> np.ndarray:
+        """Node coordinates x1_i = i L1/n1, i = 0 .. n1 - 1."""
         return np.arange(self.n1) * self.dx1
 
     @property

@@ -1,6 +1,6 @@
 """What every TOML key of a scene outside ``[law]`` means: its unit kind, its accepted
 range and a one-line meaning. The laws declare theirs with their parameters
-(``laws.base.parameter``). docs/tools/toml_page.py writes docs/toml.md from both, and
+(``laws.base.parameter``). docs/tools/toml_page.py writes docs/reference/toml.md from both, and
 tests/docs/test_toml_page.py holds them true: every key of the dataclasses is here, and
 each value listed in ``refused`` is refused by the scene's validation with an InputError
 naming that key.
@@ -46,7 +46,7 @@ TOP_KEYS = {
     "name": Key("-", "a string", "the scene's name (the output's attr `scene`)", (1.0,)),
     "t_end": Key("time", f"{SCALE}; at least one and at most 1e8 time steps", "duration of the run",
                  (0.0, -1.0, INF, "1")),
-    "beta": Key("1", "(0, the stable limit of the scheme on the grid at nu] (docs/stability.md)",
+    "beta": Key("1", "(0, the stable limit of the scheme on the grid at nu] (docs/reference/stability.md)",
                 "time-step factor, dt = beta min(dx1, dx3) / cs; default min(0.5, the limit)", (0.0, -0.5, 10.0)),
 }
 
@@ -101,9 +101,9 @@ SECTION_KEYS = {
     "numerics": {
         "formulation": Key("-", '"auto", ' + _choices(FORMULATIONS),
                            "time scheme; auto: product with a shear component, displacement otherwise "
-                           "(docs/stability.md)", ("implicit",)),
+                           "(docs/reference/stability.md)", ("implicit",)),
         "engine": Key("-", '"auto", ' + _choices(sorted(ENGINES)), "history engine; auto: exponential, direct "
-                      "with a window (docs/fast_engine.md)", ("fast",)),
+                      "with a window (docs/reference/fast_engine.md)", ("fast",)),
         "window": Key("1", f"{SCALE}; engine direct or auto", "truncate the history at T = q cs t (absent: the "
                       "whole history)", (0.0, -1.0)),
         "rupture_threshold": Key("velocity", f">= 0, in {SCALE_RANGE} or 0", "a point has failed when its slip "

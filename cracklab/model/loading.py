@@ -27,6 +27,9 @@ NUCLEATION = ("nucleation_dtau_1", "nucleation_dtau_3", "nucleation_radius", "nu
 
 @dataclass(frozen=True)
 class Loading:
+    """The traction ``tau0_j`` the plane would carry if it were welded (``tau0_2`` is tension),
+    times the time function ``time``, plus the optional forced nucleation (see the module)."""
+
     tau0_1: float | np.ndarray = 0.0
     tau0_2: float | np.ndarray = 0.0
     tau0_3: float | np.ndarray = 0.0

@@ -44,10 +44,12 @@ class Material:
 
     @property
     def cd(self) -> float:
+        """Dilatational wave speed c_d = a c_s."""
         return self.a * self.cs
 
     @property
     def rho(self) -> float:
+        """Density mu / c_s^2."""
         return self.mu / self.cs**2
 
     @cached_property

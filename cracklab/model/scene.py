@@ -27,7 +27,7 @@ DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its s
 
 def resolve_formulation(formulation: str, components) -> str:
     """"auto": the paper's displacement scheme when only mode I is active, the product
-    scheme (stable in mode II, docs/stability.md) whenever a shear component is."""
+    scheme (stable in mode II, docs/reference/stability.md) whenever a shear component is."""
     if formulation != "auto":
         return formulation
     return "product" if any(c in (1, 3) for c in components) else "displacement"
@@ -45,19 +45,19 @@ class Numerics:
     kernel (46), explicit update (37)) or "velocity" (Eq. 33, discretised kernel (45),
     semi-implicit update (50)) or "product" (velocity formulation with Z integrated
     exactly against the piecewise-linear velocity history, trapezoid update (50), one
-    predictor-corrector pass: does not grow in mode II, docs/stability.md) or "product2" (the
+    predictor-corrector pass: does not grow in mode II, docs/reference/stability.md) or "product2" (the
     product scheme with the law updated at the step's mean velocity: a slip-weakening front
-    converges at second order in dt, docs/stability.md "The order of a rupture front"); "auto" (default):
+    converges at second order in dt, docs/reference/stability.md "The order of a rupture front"); "auto" (default):
     product when a shear component is active, displacement otherwise. History ``engine``
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
     T = q c_s t (None: full history; a window longer than the run truncates nothing);
     ``rupture_threshold``: a point has failed when its velocity magnitude first exceeds it. ``fft_threads``: threads of the FFTs, and of
     the exponential engine's loop unless ``engine_threads`` is given (the two scale
-    differently: docs/performance.md). With two or more engine threads the exponential
+    differently: docs/studies/performance.md). With two or more engine threads the exponential
     engine advances its recursive states on a thread of its own while the transforms and
     the interface law run; on two cores ``fft_threads=1, engine_threads=2`` is the fastest
-    (docs/performance.md)."""
+    (docs/studies/performance.md)."""
 
     formulation: str = "auto"
     engine: str = "auto"
@@ -176,7 +176,7 @@ class Scene:
             g, mode = gamma_limit(self.formulation, active, self.grid.plane, self.material.nu)
             raise InputError("beta", f"must be in (0, {bmax:.4f}] for the {self.formulation} scheme at nu = "
                                      f"{self.material.nu:g} on this grid (mode {mode} is stable up to gamma = "
-                                     f"q_max c_s dt = {g:.4g}, docs/stability.md"
+                                     f"q_max c_s dt = {g:.4g}, docs/reference/stability.md"
                                      + kind.margin_note()
                                      + f"), got {self.beta!r}; "
                                      f"without beta a scene takes min({DEFAULT_BETA}, the limit)")
@@ -296,7 +296,7 @@ class Scene:
     def beta_max(self) -> float:
         """Largest stable beta of this scene's scheme, grid and Poisson ratio (cracklab.stability);
         of two different materials, the interface's margin (0.9) times the smaller of the two sides'
-        limits (the coupled faces grew at 0.97-1.0 of it: docs/performance.md,
+        limits (the coupled faces grew at 0.97-1.0 of it: docs/studies/performance.md,
         "Bimaterial interface")."""
         comps = self.components
         limit = min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
@@ -320,6 +320,7 @@ class Scene:
 
     @property
     def nsteps(self) -> int:
+        """Number of time steps, ceil(t_end / dt)."""
         return int(np.ceil(self.t_end / self.dt - 1e-9))
 
     @property
@@ -342,8 +343,9 @@ class Scene:
             changes["sources"] = {k: v for k, v in self.sources.items() if k.split(".")[0] not in changes}
         return dataclasses.replace(self, **changes)
 
-    # thin wrappers over cracklab.model.scene_io (lossless round trips, see docs/scenes.md)
+    # thin wrappers over cracklab.model.scene_io (lossless round trips, see docs/reference/scenes.md)
     def to_dataset(self):
+        """The scene as an xarray Dataset (a lossless round trip through ``Scene.from_dataset``)."""
         from .scene_io import scene_to_dataset
 
         return scene_to_dataset(self)
@@ -353,13 +355,14 @@ class Scene:
         sidecar next to it. Without ``path``: the TOML text, every field inline as nested
         lists. With ``path``: the scalars written to that TOML file and every field into
         ``<stem>.fields.nc`` beside it, referenced from the TOML; returns the path. Both
-        round trips through ``Scene.from_toml`` are lossless (docs/scenes.md, docs/toml.md)."""
+        round trips through ``Scene.from_toml`` are lossless (docs/reference/scenes.md, docs/reference/toml.md)."""
         from .scene_io import scene_to_toml, write_scene_toml
 
         return scene_to_toml(self) if path is None else write_scene_toml(self, path)
 
     @staticmethod
     def from_dataset(ds) -> "Scene":
+        """The scene of a Dataset written by ``to_dataset`` or by a run."""
         from .scene_io import scene_from_dataset
 
         return scene_from_dataset(ds)
@@ -370,7 +373,7 @@ class Scene:
         ``pathlib.Path`` or a one-line string ending in ".toml". A field's file reference ``{ file = "x.nc",
         var = "tau_c" }`` is read relative to the file's directory (for text: ``base``,
         default the current directory), from that folder and below or the ``allow`` folders,
-        and checked against the grid (docs/toml.md)."""
+        and checked against the grid (docs/reference/toml.md)."""
         from .scene_io import scene_from_toml
 
         return scene_from_toml(source, base=base, allow=allow)

@@ -17,7 +17,7 @@ Three representations, one strict decoder (``scene_from_data``):
   ``record.stations.<name>``, ``units.length``; the top-level ones are ``t_end``,
   ``beta`` and ``scene``, the scene's name); every array-valued parameter is a data
   variable ``<section>_<key>`` on dims (x1, x3) with the grid's coordinates. See
-  docs/scenes.md for the full layout.
+  docs/reference/scenes.md for the full layout.
 
 Every path validates at the boundary: unknown keys at any level, a string where a
 number goes, a float grid size, a list of numbers where booleans go, ... each end in
@@ -265,7 +265,7 @@ def write_scene_toml(scene, path) -> Path:
     text = _toml_text(scene, field)
     for placeholder, ref in refs.items():
         text = text.replace(placeholder, ref)
-    head = f"# cracklab scene {scene.name!r} (keys: docs/toml.md)"
+    head = f"# cracklab scene {scene.name!r} (keys: docs/reference/toml.md)"
     if fields:
         head += f"\n# its fields are in the netCDF file {sidecar.name} next to this one: {', '.join(fields)}"
         write_sidecar(scene, sidecar, fields, path.name)

@@ -372,7 +372,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     snapshots stream to that Zarr store during the run and the result is read back lazily.
     On a blow-up, what was recorded is kept (flushed to the store) and SimulationError raised.
 
-    A run into a local store path checkpoints its full state into the store (docs/reliability.md):
+    A run into a local store path checkpoints its full state into the store (docs/guide/reliability.md):
     ``checkpoint_every`` N steps, or ``"60s"`` of wall time (default: every 60 s, at most 10 %
     of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
     checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a

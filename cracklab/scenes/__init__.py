@@ -2,7 +2,7 @@
 TPV5 (a free surface by mirror symmetry), SCEC TPV6 (a bimaterial fault under a free
 surface), SCEC TPV101-TPV104 (rate-and-state friction; TPV102 and TPV104 below a free
 surface), the plane test problems used in verification, and the crack-growth problems
-of section 4 (a row of tough asperities, random toughness; see docs/scenes.md).
+of section 4 (a row of tough asperities, random toughness; see docs/reference/scenes.md).
 
 Modules: ``paper`` (the paper's problems), ``scec`` (the SCEC benchmarks), ``fronts``
 (the crack-growth problems), ``registry`` (``BUILDERS``, the builders a study file may

@@ -1,6 +1,6 @@
 """The crack-growth problems of section 4: a mode I crack driven at constant nominal K
 through a row of tough asperities (``asperity_row``) or a plane of random toughness
-(``random_toughness``), with their masks and fields (see docs/scenes.md)."""
+(``random_toughness``), with their masks and fields (see docs/reference/scenes.md)."""
 from __future__ import annotations
 
 import numpy as np
@@ -81,11 +81,11 @@ def asperity_row(*, Z=1.0, n1=512, n3=256, beta=None, t_end=3.0, tau_c=1.0, delt
     nu = 0.25 unless ``material`` is given. Linear cohesive law (``tau_c``, ``delta_c``);
     ``delta_c`` defaults to the value whose static cohesive zone (``cohesive_zone_size``)
     is ``cohesive_zone`` * Z (0.1 Z, 26 cells at 512 x 256: the zone of the running crack
-    is then ~14 cells, 0.055 Z, the paper's figure; see docs/scenes.md).
+    is then ~14 cells, 0.055 Z, the paper's figure; see docs/reference/scenes.md).
     Initial straight crack across x3 with its front at x1 = l0 = Z/4: 0 <= x1 < l0 with
     ``symmetric=False`` (the paper's words), -l0 <= x1 < l0 (across the periodic boundary)
     with ``symmetric=True``, the default: only then is G0 below the crack's actual static
-    energy release rate (see docs/scenes.md). A bonded barrier of width ``barrier_width``
+    energy release rate (see docs/reference/scenes.md). A bonded barrier of width ``barrier_width``
     (Z/4) just behind the crack's back end, across the periodic boundary, stops growth in
     -x1. Uniform load tau0 held at constant nominal K (Loading(constant_K=True)) with
     G0 = pi (1 - nu) tau0^2 l0 / (2 mu) = ``g0_ratio`` * Gc, Gc = tau_c delta_c / 2.

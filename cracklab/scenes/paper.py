@@ -57,7 +57,7 @@ def kostrov(*, n, speed, dtau=1.0, L=1.0, beta=None, t_end, record=None, numeric
     """Plane mode III crack forced to grow from the line x1 = L/2 at ``speed``
     (prescribed rupture; stress drop dtau, zero residual strength, each node released
     over the time the tip takes to cross 1.75 cells: among release times of 0, 1, 1.25,
-    1.5, 1.75 and 2 cells this one rings least at the centre; see docs/verification.md)."""
+    1.5, 1.75 and 2 cells this one rings least at the centre; see docs/studies/verification.md)."""
     grid = Grid(n1=n, n3=1, L1=L, L3=1.0)
     law = PrescribedRupture(speed=speed, origin=(grid.x1[n // 2], 0.0), residual=0.0,
                             weakening_time=1.75 * grid.dx1 / speed)

@@ -59,7 +59,7 @@ def register_builder(name, func=None, *, replace=False):
 
     A study file can name only registered builders: cracklab's own, those registered
     here, and those of installed packages under the entry-point group
-    ``"cracklab.builders"`` (see docs/ensembles.md); it never imports a module itself.
+    ``"cracklab.builders"`` (see docs/guide/ensembles.md); it never imports a module itself.
     The function object goes to the workers with each task (by reference when it is
     importable there, else by value), so the workers need no registration."""
     if func is None:

@@ -25,7 +25,7 @@ def tpv3_station_name(strike: int, dip: int) -> str:
 
 # (strike, dip) offsets from the hypocentre in units of 100 m. faultst075dp000 and
 # faultst000dp-030 (3.0 km along dip) are the MDSBI reference's two records
-# (shared/reference/tpv3_mdsbi/README.md); the problem is symmetric along dip, so
+# (the MDSBI results of the SCEC/USGS benchmark); the problem is symmetric along dip, so
 # faultst000dp030 carries the same series as faultst000dp-030.
 TPV3_STATIONS = [(s, 0) for s in (-120, -75, -45, 0, 45, 75, 120)] + \
     [(0, d) for d in (-75, -45, -30, 30, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
@@ -39,7 +39,7 @@ def _tpv3_cell_fraction(x, dx, half_width):
 
 
 def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
-    """SCEC TPV3 (see shared/reference/tpv3_mdsbi/README.md): 30 km x 15 km fault
+    """SCEC TPV3 (the SCEC/USGS benchmark; docs/studies/tpv3.md): 30 km x 15 km fault
     centred in a periodic domain, slip-weakening friction, bonded outside the fault;
     SI units. Records the SCEC on-fault stations, among them the reference's
     faultst075dp000 (7.5 km along strike) and faultst000dp-030 (3.0 km along dip), and
@@ -55,8 +55,8 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
 
     Time stepping without ``numerics``: ``Numerics(formulation="product2")``, the product
     scheme with the law's slip path advanced by the trapezoid rule, S_n = S_{n-1} +
-    dt |v_{n-1} + v*_n|/2 (rupture times second order in dt; docs/stability.md, "The order
-    of a rupture front"), at beta = min(0.125, 0.95 beta_max). See docs/tpv3.md."""
+    dt |v_{n-1} + v*_n|/2 (rupture times second order in dt; docs/reference/stability.md, "The order
+    of a rupture front"), at beta = min(0.125, 0.95 beta_max). See docs/studies/tpv3.md."""
     L1, L3 = domain
     n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
     grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
@@ -71,7 +71,7 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.125: the rupture times within 0.05 s at 100 m (docs/tpv3.md, "Rupture time")
+    if beta is None:  # at most 0.125: the rupture times within 0.05 s at 100 m (docs/studies/tpv3.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
@@ -81,7 +81,7 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
 
 # ---------------------------------------------------------------------------- SCEC TPV5
 #: (strike offset from the hypocentre, depth below the free surface) in units of 100 m.
-#: The first five are the MDSBI reference's records (shared/reference/tpv5_mdsbi/README.md):
+#: The first five are the MDSBI reference's records (the MDSBI results of the SCEC/USGS benchmark):
 #: faultst000dp000 on the surface above the hypocentre, faultst000dp030 3 km below it,
 #: faultst000dp075 the hypocentre, faultst-075dp075 and faultst075dp075 the centres of the
 #: 78 MPa and 62 MPa patches. The others sample the rest of the fault (surface, deep edge).
@@ -109,7 +109,7 @@ def _surface_fault_grid(dx, domain):
 
 
 def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
-    """SCEC TPV5 (see shared/reference/tpv5_mdsbi/README.md): TPV3's fault reaching a free
+    """SCEC TPV5 (the SCEC/USGS benchmark; docs/studies/tpv5.md): TPV3's fault reaching a free
     surface, with two more stress patches; SI units.
 
     The free surface is the line x3 = 0 by mirror symmetry (``Grid(free_surface=True)``):
@@ -130,7 +130,7 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     Time stepping without ``numerics`` as ``tpv3``: ``formulation="product2"`` (second
     order in dt) at beta = min(0.125, 0.95 beta_max); the first-order product scheme needed
     beta = 0.09 to keep every station's rupture time within 0.05 s of the reference at
-    100 m. See docs/tpv5.md."""
+    100 m. See docs/studies/tpv5.md."""
     grid = _surface_fault_grid(dx, domain)
     n1 = grid.n1
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
@@ -146,7 +146,7 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
     stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv5.md, "Rupture time")
+    if beta is None:  # at most 0.125, as tpv3 (docs/studies/tpv5.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
@@ -155,7 +155,7 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
 
 # ---------------------------------------------------------------------------- SCEC TPV6
 #: (strike offset from the hypocentre, depth below the free surface) in units of 100 m. The
-#: first five are the MDSBI reference's (shared/reference/tpv6_mdsbi/README.md: its files
+#: first five are the MDSBI reference's (the MDSBI results of the SCEC/USGS benchmark: its files
 #: farstSSSdpDDD.txt and nearstSSSdpDDD.txt are the two sides of faultstSSSdpDDD).
 TPV6_REFERENCE_STATIONS = [(0, 0), (-120, 0), (120, 0), (-120, 75), (120, 75)]
 TPV6_STATIONS = TPV6_REFERENCE_STATIONS + [(0, 75), (-75, 75), (75, 75), (0, 120)]
@@ -168,7 +168,7 @@ TPV6_FAR = Material(mu=(2670.0 / 1.2) * (3464.0 / 1.6)**2, cs=3464.0 / 1.6, nu=0
 
 def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0),
          materials=None):
-    """SCEC TPV6 (see shared/reference/tpv6_mdsbi/README.md): a vertical strike-slip fault
+    """SCEC TPV6 (the SCEC/USGS benchmark; docs/studies/tpv6.md): a vertical strike-slip fault
     between two materials, reaching a free surface; SI units.
 
     ``materials`` = (far, near): the compliant far side is the top (x2 > 0), rho 2225 kg/m^3,
@@ -186,8 +186,8 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     (slip rate above 1 mm/s); ``record`` replaces that (add the faces' fields ``u_1_top``,
     ... to record each side's motion). beta: at most 0.125 as ``tpv3``, relative to the
     near side's c_s (it sets dt). Time stepping: the scheme ``product2`` (rupture fronts at
-    second order in dt, docs/stability.md); ``numerics`` replaces it. ``materials`` = (top,
-    bottom) replaces the pair (None: (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/tpv6.md."""
+    second order in dt, docs/reference/stability.md); ``numerics`` replaces it. ``materials`` = (top,
+    bottom) replaces the pair (None: (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/studies/tpv6.md."""
     grid = _surface_fault_grid(dx, domain)
     n1 = grid.n1
     xc, depth = grid.x1[n1 // 2], grid.x3
@@ -204,7 +204,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
     if not isinstance(pair, (tuple, list)) or len(pair) != 2 or not all(isinstance(m, Material) for m in pair):
         raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
-    if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Rupture time"), for the side that sets dt
+    if beta is None:  # at most 0.125, as tpv3 (docs/studies/tpv3.md, "Rupture time"), for the side that sets dt
         fast = max(pair, key=lambda m: m.cs)
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
     return Scene(materials=tuple(pair), grid=grid, law=law,
@@ -284,7 +284,7 @@ def _tpv103_law(box):
 
 
 def tpv101(*, dx=100.0, t_end=15.0, beta=None, record=None, numerics=None, domain=(72000.0, 36000.0)):
-    """SCEC TPV101 (see shared/reference/tpv101_uguca/README.md): rate-and-state friction,
+    """SCEC TPV101 (the SCEC/USGS benchmark; docs/studies/tpv101.md): rate-and-state friction,
     ageing law, in a whole space. a = 0.008 + 0.008 (1 - B(x; 15 km, 3 km) B(z; 7.5 km, 3 km))
     (velocity weakening in the 30 km x 15 km box, strengthening outside), b 0.012, L 0.02 m,
     V0 1e-6 m/s, f0 0.6, sigma_n 120 MPa; tau0 75 MPa along strike with V_ini = 1e-12 m/s

@@ -1,5 +1,5 @@
 """One half space answering its own face displacement: the independent formulation
-(docs/equations.md, "One half space: Eqs. (20)-(22)"), product scheme.
+(docs/reference/equations.md, "One half space: Eqs. (20)-(22)"), product scheme.
 
 Per mode, in the frame of the wave vector (L along q, N normal, T transverse), the face
 of the upper half space answers its velocity history v with

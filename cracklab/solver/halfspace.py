@@ -17,7 +17,7 @@ The functionals below are written for the identical pair (scale 1/2, the paper's
 form); with scale s, mu/2 reads s mu throughout.
 
 Product scheme (velocity formulation, Z integrated exactly against the piecewise-linear
-velocity history, docs/stability.md):
+velocity history, docs/reference/stability.md):
     F_n = -(mu q / 2) Z(0) D_n + (mu / 2 c_s) gamma [sum_{m=0}^n W_m V_{n-m} + E_0(n) V_0],
 with D_n = D_{n-1} + dt (V_{n-1} + V_n)/2; the V_n terms form K V_n with
 K = (mu gamma / 2 c_s)(W_0 - Z(0)/2), applied to a predicted then a corrected velocity.

@@ -1,7 +1,7 @@
 """Compiled elementwise loops of the time step: one pass over the grid, no temporaries.
 
 Two operations run several times per step on every mode or node and, written as numpy
-expressions, cost more in temporaries than in arithmetic (docs/performance.md):
+expressions, cost more in temporaries than in arithmetic (docs/studies/performance.md):
 
 * :func:`rotate`: the shear rotation of Eq. (28) between the components (1, 3) of a mode
   and its channels (II, III), and back;

@@ -11,7 +11,7 @@ n3 + 1) modes k3 = pi j / L3. For an even component (1, 2) that is the cosine tr
 (DCT-I) along x3, then a real FFT along x1; for the odd component 3, -i times its sine
 transform (DST-I), then the same FFT. Holding the doubled cell's coefficients, every mode
 is rotated (Eq. 28) and convolved as in the periodic problem, and the inverse carries
-1/N with N = n1 2 n3, the doubled cell's (docs/equations.md, "A free surface by mirror
+1/N with N = n1 2 n3, the doubled cell's (docs/reference/equations.md, "A free surface by mirror
 symmetry"). The transforms are computed as the doubled cell's real 2D FFT, which FFTW
 does faster than its own cosine and sine transforms (its r2r kinds have no SIMD
 codelets), with an even and an odd field at once: their doubled fields are added, and

@@ -1,5 +1,5 @@
 """Measured stability limits of the time-stepping schemes against Poisson's ratio
-(section 3.1, Eq. 52; docs/stability.md, "Limits for every Poisson ratio").
+(section 3.1, Eq. 52; docs/reference/stability.md, "Limits for every Poisson ratio").
 
 ``LIMITS[scheme][mode][k]`` is the largest gamma = q c_s dt up to which the envelope of
 the single-mode response of that scheme grows by at most GROWTH_TOLERANCE = 5e-4 per

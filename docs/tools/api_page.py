@@ -1,13 +1,12 @@
-"""Write docs/api.md, the reference of cracklab's public names, from the live code.
+"""Write docs/reference/api.md, the reference of cracklab's public names, from the live code.
 
-    python docs/tools/api_page.py            # rewrite docs/api.md
-    python docs/tools/api_page.py --check    # exit 1 if docs/api.md is not what it would write
+    python docs/tools/api_page.py            # rewrite docs/reference/api.md
+    python docs/tools/api_page.py --check    # exit 1 if docs/reference/api.md is not what it would write
 
 The names and their grouping by layer are listed here (``groups``); each entry's
 signature comes from ``inspect.signature`` (the command line's from its click
-parameters) and its summary is the first sentence of its docstring. A name without a
-docstring of its own takes the meaning given in shared/API.md or docs/getting_started.md
-(``NO_DOCSTRING``), marked as such on the page. tests/docs/test_api_page.py fails when the
+parameters) and its summary is the first sentence of its docstring; a listed name without
+a docstring of its own stops the script. tests/docs/test_api_page.py fails when the
 committed page differs from what this script writes.
 """
 from __future__ import annotations
@@ -22,34 +21,13 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGE = ROOT / "docs" / "api.md"
+PAGE = ROOT / "docs" / "reference" / "api.md"
 try:
     import cracklab  # noqa: F401
 except ImportError:  # run from a checkout without an install
     sys.path.insert(0, str(ROOT))
 
-#: meanings (from shared/API.md, the docs pages or the code) for public names whose object
-#: has no docstring of its own; the page marks them "(no docstring)"
-NO_DOCSTRING = {
-    "cracklab.Material.cd": "Dilatational wave speed c_d = a c_s.",
-    "cracklab.Material.rho": "Density mu / cs^2.",
-    "cracklab.Grid.x1": "Node coordinates x1_i = i L1/n1.",
-    "cracklab.Grid.x3": "Node coordinates x3_k = k L3/n3.",
-    "cracklab.Grid.dx1": "Node spacing L1/n1.",
-    "cracklab.Grid.dx3": "Node spacing L3/n3.",
-    "cracklab.Loading": "The traction the plane would carry if it were welded (tau0_2 is tension), "
-                        "times a function of time (docs/getting_started.md).",
-    "cracklab.Scene": "Everything a run needs: material, grid, interface law, loading, duration, "
-                      "time-step factor beta (dt = beta min(dx1, dx3) / cs) and what to record, "
-                      "with the numerical options (shared/API.md).",
-    "cracklab.Scene.replace": "A new scene with the given fields changed, validated like any other "
-                              "(shared/API.md).",
-    "cracklab.Scene.nsteps": "Number of time steps, ceil(t_end / dt).",
-    "cracklab.Scene.to_dataset": "The scene as an xarray Dataset (a lossless round trip, docs/scenes.md).",
-    "cracklab.Scene.from_dataset": "The scene of a Dataset written by `to_dataset` or by a run.",
-}
-
-#: promised by shared/API.md; listed as "not in cracklab yet" while they are missing
+#: promised by the project's public API; listed as "not in cracklab yet" while they are missing
 PROMISED = ("cracklab.scenes.tpv5", "cracklab.scenes.tpv6", "cracklab.scenes.tpv101",
             "cracklab.scenes.tpv102", "cracklab.scenes.tpv103", "cracklab.scenes.tpv104")
 
@@ -134,7 +112,7 @@ def first_sentence(doc: str | None) -> str:
         return ""
     para = inspect.cleandoc(doc).split("\n\n")[0]
     text = " ".join(line.strip() for line in para.splitlines())
-    for m in re.finditer(r"(?<=[^\s.])[.!?](?=\s|$)", text):
+    for m in re.finditer(r"(?<=[^\s.])[.!?](../?=\s|$)", text):
         word = re.search(r"([\w.]*)$", text[:m.start()]).group(1)
         if word in ABBREVIATIONS or (len(word) == 1 and word.isalpha()):
             continue
@@ -250,16 +228,16 @@ def entry(dotted: str) -> str:
     owner, obj = resolve(dotted)
     summary = first_sentence(own_doc(dotted, owner, obj))
     if not summary:
-        summary = f"{NO_DOCSTRING[dotted]} *(no docstring)*" if dotted in NO_DOCSTRING else "*(no docstring)*"
+        raise SystemExit(f"{dotted} has no docstring of its own: write one (its first sentence is its summary here)")
     code, note = signature(dotted, owner, obj)
     return f"- `{code}`{f' ({note})' if note else ''}: {summary}"
 
 
-HEADER = """# API reference
+HEADER = """# API summary
 
 The public names of `cracklab`, by layer: each with its signature and the first sentence
-of its docstring. The names and their meanings are the project's promise to its users
-(`shared/API.md`); the other pages ([index.md](index.md)) explain them. This page is
+of its docstring. The names and their meanings are the project's promise to its users;
+the other pages ([index.md](../index.md)) explain them. This page is
 written from the code by `docs/tools/api_page.py` (`python docs/tools/api_page.py`), and
 `tests/docs/test_api_page.py` fails when it is not what the script writes.
 """
@@ -284,12 +262,12 @@ def render() -> str:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--check", action="store_true", help="exit 1 if docs/api.md is out of date")
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/reference/api.md is out of date")
     args = ap.parse_args(argv)
     text = render()
     if args.check:
         ok = PAGE.exists() and PAGE.read_text() == text
-        print("docs/api.md is up to date" if ok else "docs/api.md is out of date: run python docs/tools/api_page.py")
+        print("docs/reference/api.md is up to date" if ok else "docs/reference/api.md is out of date: run python docs/tools/api_page.py")
         return 0 if ok else 1
     PAGE.write_text(text)
     print(f"wrote {PAGE}")

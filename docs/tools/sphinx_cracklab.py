@@ -1,7 +1,7 @@
 """Sphinx extension of the documentation site (docs/conf.py).
 
 - ``.. cracklab-api::`` writes the API reference of the site: for every layer of
-  docs/tools/api_page.py (the same public names, in the same order, as docs/api.md) a
+  docs/tools/api_page.py (the same public names, in the same order, as docs/reference/api.md) a
   section with an autodoc entry per name (full docstring, members of classes), and the
   ``--help`` text of every ``cracklab`` subcommand. A public name added to api_page.py
   therefore appears on the site without editing a page.
@@ -16,7 +16,6 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 import importlib
 import importlib.util
 import inspect
@@ -93,28 +92,7 @@ def reference_lines() -> list[str]:
                 continue
             owner, obj = page.resolve(name)
             lines += [f".. {autodoc_kind(obj, owner)}:: {name}", ""]
-            if name in page.NO_DOCSTRING:
-                lines += [f"   {rst_inline(page.NO_DOCSTRING[name])}", ""]
-            # listed members without a docstring of their own (autodoc's :members: skips
-            # them): with the meaning api_page.py gives them
-            for member in names:
-                if "." not in member or member.rsplit(".", 1)[0] != name:
-                    continue
-                m_owner, m_obj = page.resolve(member)
-                if page.own_doc(member, m_owner, m_obj):
-                    continue
-                lines += [f"   .. {member_kind(m_obj)}:: {member}", ""]
-                if member in page.NO_DOCSTRING:
-                    lines += [f"      {rst_inline(page.NO_DOCSTRING[member])}", ""]
     return lines
-
-
-def member_kind(obj) -> str:
-    if isinstance(obj, (property, functools.cached_property)):
-        return "autoproperty"
-    if isinstance(obj, (classmethod, staticmethod)) or inspect.isfunction(obj):
-        return "automethod"
-    return "autoattribute"
 
 
 class CracklabAPI(SphinxDirective):

@@ -1,7 +1,7 @@
-"""Write docs/toml.md, the reference of every key of a TOML scene, from the live definitions.
+"""Write docs/reference/toml.md, the reference of every key of a TOML scene, from the live definitions.
 
-    python docs/tools/toml_page.py            # rewrite docs/toml.md
-    python docs/tools/toml_page.py --check    # exit 1 if docs/toml.md is not what it would write
+    python docs/tools/toml_page.py            # rewrite docs/reference/toml.md
+    python docs/tools/toml_page.py --check    # exit 1 if docs/reference/toml.md is not what it would write
 
 What the page lists comes from the code: the sections and their keys from the dataclasses
 (``cracklab.model.scene_io.section_classes``, each key's kind of value from the decoder's
@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGE = ROOT / "docs" / "toml.md"
+PAGE = ROOT / "docs" / "reference" / "toml.md"
 try:
     import cracklab  # noqa: F401
 except ImportError:  # run from a checkout without an install
@@ -255,8 +255,8 @@ def render() -> str:
         rows.append((f"`[{section}]`", "table", "-", "below", "*required*" if section in ("material", "grid", "law")
                      else "every key at its default", ""))
     rows.append(("`[materials.top]`, `[materials.bottom]`", "tables", "-", "the keys of `[material]`", "*absent*",
-                 "the half spaces x2 > 0 and x2 < 0, instead of `[material]`; two different materials are refused "
-                 "until their interface is implemented"))
+                 "the half spaces x2 > 0 and x2 < 0, instead of `[material]`; two different materials make a "
+                 "bimaterial interface"))
     lines += key_table(rows)
     lines += ["", "## `[units]`", "", "All three or none; default `\"1\"` each (a dimensionless scene). Each is a "
               "UDUNITS-2 unit string, the units the CF conventions write (parsed by cf-units), that is a positive "
@@ -270,8 +270,8 @@ def render() -> str:
     classes = section_classes()
     titles = {
         "material": "The half spaces' material (both sides).",
-        "grid": "The periodic grid on the fracture plane (docs/scenes.md, \"The grid\").",
-        "loading": "tau0_j(x1, x3) times a function of time (docs/equations.md, \"Loading\"); the nucleation keys "
+        "grid": "The periodic grid on the fracture plane (docs/reference/scenes.md, \"The grid\").",
+        "loading": "tau0_j(x1, x3) times a function of time (docs/reference/equations.md, \"Loading\"); the nucleation keys "
                    "go together: all of `nucleation_radius`, `nucleation_time`, `nucleation_x1`, `nucleation_x3` and "
                    "one or both of `nucleation_dtau_1`, `nucleation_dtau_3`, or none.",
         "record": "What the run records: grid fields at a cadence, station series (`[record.stations]`), "
@@ -301,12 +301,12 @@ def examples_of(text: str) -> list[str]:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--check", action="store_true", help="exit 1 if docs/toml.md is out of date")
+    ap.add_argument("--check", action="store_true", help="exit 1 if docs/reference/toml.md is out of date")
     args = ap.parse_args(argv)
     text = render()
     if args.check:
         ok = PAGE.exists() and PAGE.read_text() == text
-        print("docs/toml.md is up to date" if ok else "docs/toml.md is out of date: run python docs/tools/toml_page.py")
+        print("docs/reference/toml.md is up to date" if ok else "docs/reference/toml.md is out of date: run python docs/tools/toml_page.py")
         return 0 if ok else 1
     PAGE.write_text(text)
     print(f"wrote {PAGE}")

@@ -1,4 +1,4 @@
-"""Write docs/accuracy_vs_cost.md from the rows of studies/accuracy_vs_cost/run.py.
+"""Write docs/studies/accuracy_vs_cost.md from the rows of studies/accuracy_vs_cost/run.py.
 
 Everything with a number in it is computed from the rows; the explanations are fixed text
 that the numbers were checked against when the page was last regenerated (see run.py).
@@ -112,12 +112,12 @@ def write_page(rows, path):
     w("Output: `studies/accuracy_vs_cost/results/results.csv` and `results.zarr` (one row per run, "
       "with `on_front`), `docs/figures/accuracy_pareto.png`, this page. Helpers are tested in "
       "`tests/studies/test_studies_quick.py`.\n")
-    w("![Pareto fronts](figures/accuracy_pareto.png)\n")
+    w("![Pareto fronts](../figures/accuracy_pareto.png)\n")
     w("Colours: engine (direct untruncated, direct truncated at T_cut = 50 or 100, exponential); "
       "markers: formulation (circle displacement = the paper's explicit scheme with the trapezoid "
       "pre-integrated C; square velocity = semi-implicit with the discretised Z; triangle product = "
       "Z integrated against the piecewise-linear velocity, one predictor-corrector pass, second order, "
-      "docs/stability.md). Open markers: runs that blew up (drawn above the panel's largest error). "
+      "docs/reference/stability.md). Open markers: runs that blew up (drawn above the panel's largest error). "
       "Ringed and joined: the front, where errors within "
       f"{FRONT_RTOL:g} of each other count as equal (the exponential engine reproduces the direct one "
       "to ~1e-6).\n")
@@ -247,7 +247,7 @@ MODAL_TEXT = """\
   at the 50th period the error is 1 to 800 times that of the full history in mode I (but see gamma = 0.2
   below), 70 to 6e4 times (T_cut = 50) and 1.7 to 2e3 times (T_cut = 100) in mode II; in mode III it is
   of order 1 of the J0 envelope (the T^-1/2 tail is the memory). This is far from the 3 % to 30 %
-  quoted for the peers in issue 3: a hard cut of the kernel, as `Numerics(window=...)` does, is unusable
+  quoted for truncated kernels in other codes: a hard cut of the kernel, as `Numerics(window=...)` does, is unusable
   for long runs here. It saves about 20 to 30 % of the CPU of these one-mode runs (median). Truncated runs reach the
   front only at the inaccurate end, and in mode I at gamma = 0.2, where the growth due to truncation
   happens to offset the damping of the displacement scheme at the 50th period (error 0.11 against 0.15
@@ -260,7 +260,7 @@ MODAL_TEXT = """\
   mode II the product scheme is (gamma = 0.05: 3.8e-3; the velocity scheme 5.9e-3), as its mode II does
   not grow. The paper's displacement scheme is the cheapest at a given gamma but first order (2.4e-2 at
   gamma = 0.05, 5.6e-2 at 0.1 in mode I). The second-order product scheme damps the Rayleigh
-  oscillation (precision factor 0.94 at the 50th period at gamma = 0.1 in mode I, docs/stability.md):
+  oscillation (precision factor 0.94 at the 50th period at gamma = 0.1 in mode I, docs/reference/stability.md):
   1.6e-2 at gamma = 0.05 in mode I, 4.2e-3 in mode III. On the grid, though, the velocity scheme is
   limited to beta <= 0.077 (mode I) and 0.061 (shear), 6.5 to 8 times the steps of beta = 0.5, which is
   why it loses Lamb's problem.

@@ -39,7 +39,7 @@ other jobs (load average up to 20 during the runs here) it is several times larg
     .venv/bin/python studies/accuracy_vs_cost/run.py --from-csv studies/accuracy_vs_cost/results/results.csv
 
 Writes results/results.csv, results/results.zarr, docs/figures/accuracy_pareto.png and
-(full run, or --docs) docs/accuracy_vs_cost.md; --quick writes results/quick/ only.
+(full run, or --docs) docs/studies/accuracy_vs_cost.md; --quick writes results/quick/ only.
 """
 from __future__ import annotations
 
@@ -63,7 +63,7 @@ except ImportError:  # run from a checkout without installing
 
 NU = 0.25
 FIG_DIR = ROOT / "docs" / "figures"
-DOC = ROOT / "docs" / "accuracy_vs_cost.md"
+DOC = ROOT / "docs" / "studies" / "accuracy_vs_cost.md"
 OUT = HERE / "results"
 REFERENCE = HERE / "modal_reference.json"
 #: errors within 0.1 % count as equal on the drawn and tabulated fronts (the exponential
@@ -616,7 +616,7 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="Lamb n = 32; modal gamma = 0.5 (< 1 min of CPU)")
     ap.add_argument("--out", type=Path, default=OUT, help="directory of results.csv and results.zarr")
     ap.add_argument("--from-csv", type=Path, help="redraw and rewrite the docs from a results.csv")
-    ap.add_argument("--docs", action="store_true", help="write docs/accuracy_vs_cost.md (default: full runs)")
+    ap.add_argument("--docs", action="store_true", help="write docs/studies/accuracy_vs_cost.md (default: full runs)")
     ap.add_argument("--no-figure", action="store_true")
     ap.add_argument("--reuse", type=Path, help="take the runs already in this CSV (e.g. results.partial.csv) "
                                                 "instead of running them again")

@@ -1,4 +1,4 @@
-"""docs/paper_asperities.md, written from the study's numbers (run.py calls ``write``)."""
+"""docs/studies/paper_asperities.md, written from the study's numbers (run.py calls ``write``)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -117,7 +117,7 @@ nice -n 10 .venv/bin/python studies/asperity_front/run.py      # runs, fronts, f
 ## Set-up
 
 `cracklab.scenes.asperity_row` with its defaults, which are the paper's values
-(docs/scenes.md explains each choice):
+(docs/reference/scenes.md explains each choice):
 
 | | paper | here |
 | --- | --- | --- |
@@ -126,7 +126,7 @@ nice -n 10 .venv/bin/python studies/asperity_front/run.py      # runs, fronts, f
 | material | nu not stated | mu = c_s = 1, nu = 1/4, c_R = {_f(s['cR'], 4)} c_s |
 | law | linear cohesive, Fig. 4 | `LinearCohesive`, tau_c = 1, delta_c = {_f(s['delta_c'], 4)} (static zone R0 = 0.1 Z) |
 | asperities | 2 disks, diameter Z/8, at x1 = 0.578 Z, x3 = Z/4, 3Z/4, tau_c x 3 | the same |
-| initial crack | 0 <= x1 <= Z/4 | -Z/4 <= x1 < Z/4 (`symmetric=True`, the only reading in which G0 is the crack's static G; docs/scenes.md) |
+| initial crack | 0 <= x1 <= Z/4 | -Z/4 <= x1 < Z/4 (`symmetric=True`, the only reading in which G0 is the crack's static G; docs/reference/scenes.md) |
 | load | step, tau0 ~ 1/sqrt(mean length), G0 = 1.25 Gc | the same (`Loading(constant_K=True)`), tau0 = {_f(s['tau0'], 4)} initially |
 | barrier | "very high toughness" behind the crack | bonded band Z/4 wide |
 | history | full | full, exponential engine (`Numerics(engine="exponential")`) |
@@ -137,9 +137,9 @@ problem) that vary the loading, to test the speed against Freund's equation.
 
 ## Fig. 12: the front bows around and breaks the asperities
 
-![Fig. 12](figures/asperity_front_3d.png)
+![Fig. 12](../figures/asperity_front_3d.png)
 
-![plan view](figures/asperity_front_plan.png)
+![plan view](../figures/asperity_front_plan.png)
 
 Opening / delta_c over x1 in [0.3, 1.05] Z at the six times marked in Fig. 13, and the
 crack tip (the contour opening = delta_c, which shows the asperities being broken from their leading edge) in plan view. The times are found from the run:
@@ -175,7 +175,7 @@ grid half as fine (grid check below), so it is not a matter of resolution.
 
 ## Fig. 13: mean crack length
 
-![Fig. 13](figures/asperity_front_length.png)
+![Fig. 13](../figures/asperity_front_length.png)
 
 Left: mean crack length (tip from the opening; thin lines, leading edge of the
 cohesive zone from `rupture_time`) with and without the asperities, and the times of
@@ -190,7 +190,7 @@ crack stops for a while). Here it has only a dip in speed, to {_f(a['min_mean_sp
 
 ## Steady speed and cohesive zone against Freund and Palmer-Rice
 
-![speed and zone](figures/asperity_front_speed_zone.png)
+![speed and zone](../figures/asperity_front_speed_zone.png)
 
 | quantity | value |
 | --- | --- |
@@ -218,7 +218,7 @@ crack stops for a while). Here it has only a dip in speed, to {_f(a['min_mean_sp
   because the measured zone ends where the opening falls to 1e-3 delta_c, and the
   opening tapers off over a few cells at the leading edge, while the estimate assumes
   that the stress falls linearly with distance across the zone. The static R0 = 0.1 Z
-  is an input: delta_c is chosen from it (docs/scenes.md), so that the running zone
+  is an input: delta_c is chosen from it (docs/reference/scenes.md), so that the running zone
   matches the paper's 14 cells. The zone at Freund's speed would be
   {_f(s['R_at_v_freund'], 4)} Z, so the zone length also favours the measured speed over Freund's.
 - **Speed.** The crack runs at {_f(s['v_uniform_run'])} c_s before the asperities and
@@ -287,7 +287,7 @@ What the table shows:
    - **Not numerical.** A time step four times smaller changes the factor by
      {_f(dbeta, 3)} at 0.6 Z, and the grid check below (half the cell size, 3D) moves
      the speed by less than 0.01 c_s: the excess is what the model gives, not a
-     discretisation error. The energy budget (docs/energy.md) rules out a numerical
+     discretisation error. The energy budget (docs/studies/energy.md) rules out a numerical
      loss of fracture energy too: the scheme dissipates about 1.05 Gc per broken node
      at 256 x 128, the excess halving with the cell size, which would slow the crack.
    - **Partly the size of the cohesive zone.** With R0 = 0.1 Z the zone is 15 to 40 %
@@ -354,7 +354,7 @@ processes (load average 15 to 20 during these runs). The paper reports about
 
 ## What is left
 
-- The energy flux into the moving tip, G(t), is not measured here. docs/energy.md
+- The energy flux into the moving tip, G(t), is not measured here. docs/studies/energy.md
   gives the global budget of the asperity row. A local G would settle point 3 above.
 - A finer grid (1024 x 512) to extend the grid check above.
 - The exact g(v) = A_I(v) k(v)^2 in place of 1 - v/c_R, and a dynamic K*(t, l) from

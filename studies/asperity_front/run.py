@@ -8,7 +8,7 @@ equation of motion and a Palmer-Rice estimate.
 One command: runs the 512 x 256 problem with and without the asperities and four
 plane (n3 = 1) diagnostics of the crack speed into Zarr stores under OUT (finished
 runs are reused unless --force), measures the fronts into OUT/fronts.zarr, draws
-docs/figures/asperity_front_*.png and writes docs/paper_asperities.md from the
+docs/figures/asperity_front_*.png and writes docs/studies/paper_asperities.md from the
 numbers (OUT/numbers.json).
 """
 from __future__ import annotations
@@ -410,7 +410,7 @@ def main(argv=None):
     (out / "numbers.json").write_text(json.dumps(res, indent=1, default=float))
     import page
 
-    page.write(res, Path(args.docs) / "paper_asperities.md", out)
+    page.write(res, Path(args.docs) / "studies" / "paper_asperities.md", out)
     print(json.dumps({k: res[k] for k in ("steady", "asperities", "events")}, indent=1, default=float))
     return 0
 

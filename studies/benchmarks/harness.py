@@ -1,4 +1,4 @@
-"""The harness of the benchmark studies (studies/tpv3, tpv5, tpv6, tpv101; docs/tpv3.md,
+"""The harness of the benchmark studies (studies/tpv3, tpv5, tpv6, tpv101; docs/studies/tpv3.md,
 tpv5.md, tpv6.md, tpv101.md, tpv103.md): what every benchmark does the same way.
 
 * ``reference_dir``, ``mdsbi_station``: where a benchmark's reference lies (``--reference
@@ -251,7 +251,7 @@ def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help
            t_end_help="simulated time of the runs (s)", page=None, first=()) -> argparse.ArgumentParser:
     """The options every study's run.py has: -o, --dx, --t-end, --quick, --report-only,
     --force, --figures, --page, --reference (``name``: the study's folder under out/ and
-    its page docs/<name>.md unless ``page`` names it; ``first``: (args, kwargs) of options
+    its page docs/studies/<name>.md unless ``page`` names it; ``first``: (args, kwargs) of options
     added before them)."""
     p = argparse.ArgumentParser(description=doc.splitlines()[0])
     for a, kw in first:
@@ -263,7 +263,7 @@ def parser(doc: str, name: str, *, dx_help: str, quick_help: str, reference_help
     p.add_argument("--report-only", action="store_true", help="only redraw figures and page from the stores")
     p.add_argument("--force", action="store_true", help="rerun even if a complete store exists")
     p.add_argument("--figures", default=None, help="figure directory (default docs/figures)")
-    p.add_argument("--page", default=None, help=f"page to write (default {page or f'docs/{name}.md'})")
+    p.add_argument("--page", default=None, help=f"page to write (default {page or f'docs/studies/{name}.md'})")
     p.add_argument("--reference", default=None,
                    help=f"{reference_help} (default ${REFERENCE_ENV}/<name>, else ../shared/reference/<name> "
                         "beside the repository)")
@@ -285,20 +285,19 @@ def spacings(args, *, quick, quick_t_end, default, accept_dx=None) -> tuple[Path
 
 def page_paths(args, out, page_name, quick) -> tuple[Path, Path]:
     """(figure folder, page) of a run.py: --figures and --page when given, else OUT itself
-    with --quick, else docs/figures and docs/<page_name>.md; the figure folder is created."""
+    with --quick, else docs/figures and docs/studies/<page_name>.md; the figure folder is created."""
     figdir = Path(args.figures or (out if quick else ROOT / "docs" / "figures"))
-    page = Path(args.page or (out / f"{page_name}.md" if quick else ROOT / "docs" / f"{page_name}.md"))
+    page = Path(args.page or (out / f"{page_name}.md" if quick else ROOT / "docs" / "studies" / f"{page_name}.md"))
     figdir.mkdir(parents=True, exist_ok=True)
     return figdir, page
 
 
 def figure_link(figdir, page) -> str:
-    """The figure folder as the page links it: relative to the page's folder when below it."""
-    try:
-        rel = Path(figdir).resolve().relative_to(Path(page).resolve().parent)
-    except ValueError:
-        rel = Path(figdir).resolve()
-    return rel.as_posix()
+    """The figure folder as the page links it: relative to the page's folder (docs/studies/
+    pages link docs/figures as ../figures)."""
+    import os
+
+    return Path(os.path.relpath(Path(figdir).resolve(), Path(page).resolve().parent)).as_posix()
 
 
 def command_line(module: str, argv=None) -> str:

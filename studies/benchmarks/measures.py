@@ -1,5 +1,5 @@
 """Series measures and the acceptance check shared by the slip-weakening benchmarks
-(studies/tpv3, studies/tpv5, studies/tpv6; docs/tpv3.md, docs/tpv5.md, docs/tpv6.md).
+(studies/tpv3, studies/tpv5, studies/tpv6; docs/studies/tpv3.md, docs/studies/tpv5.md, docs/studies/tpv6.md).
 
 Plain functions on 1-D numpy arrays, so that they can be checked on synthetic series
 with known answers (tests/studies/test_tpv3_study.py):

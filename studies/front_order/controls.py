@@ -1,5 +1,5 @@
 """Controlled experiments on the source of the product scheme's first-order front
-(docs/stability.md, "The order of a rupture front"): change one thing, measure the order.
+(docs/reference/stability.md, "The order of a rupture front"): change one thing, measure the order.
 
     python studies/front_order/controls.py [--dx 200] [-o OUT]
 

@@ -1,4 +1,4 @@
-"""The order in dt of a slip-weakening rupture front on the grid (docs/stability.md,
+"""The order in dt of a slip-weakening rupture front on the grid (docs/reference/stability.md,
 "The order of a rupture front").
 
     python studies/front_order/run.py [--mode II III] [--betas 0.25 0.125 ...] [--formulation product ...]

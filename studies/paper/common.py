@@ -137,6 +137,6 @@ def table(header, rows):
 
 
 def write_page(name, text):
-    path = DOCS / name
+    path = DOCS / "studies" / name
     path.write_text(text.rstrip() + "\n")
     return path

@@ -379,11 +379,11 @@ opening history on both axes, and `static_periodic_delta_2`).
 
 ## Fig. 10: the opening after 40, 80 and 900 steps
 
-![Opening after 40, 80 and 900 steps](figures/paper_ellipse_fig10.png)
+![Opening after 40, 80 and 900 steps](../figures/paper_ellipse_fig10.png)
 
 All recorded snapshots as maps (same colour scale):
 
-![Opening maps](figures/paper_ellipse_maps.png)
+![Opening maps](../figures/paper_ellipse_maps.png)
 
 - (a) 40 steps: as in the paper, the opening is uniform on the part of the crack that
   no wave from the edge has reached. There it should be the plane-wave response
@@ -395,7 +395,7 @@ All recorded snapshots as maps (same colour scale):
 
 ## Fig. 11: the opening along the major axis over time; the dynamic overshoot
 
-![Opening along the major axis over time](figures/paper_ellipse_fig11.png)
+![Opening along the major axis over time](../figures/paper_ellipse_fig11.png)
 
 The centre opening overshoots its static value by {100 * s['overshoot_gs']:.1f}% of the
 Green-Sneddon value ({100 * s['overshoot_discrete']:.1f}% of the static value of the discrete periodic
@@ -420,7 +420,7 @@ history with the direct and the exponential engines (largest difference
 
 ## The final opening against the static solution
 
-![Final opening against the static solutions](figures/paper_ellipse_final.png)
+![Final opening against the static solutions](../figures/paper_ellipse_final.png)
 
 Static centre openings: Green-Sneddon {gs0:.5f} (nominal a, b), {sc['Green-Sneddon (a + dx/2, b + dx/2)']:.5f}
 (semi-axes of the node mask, a + dx/2 and b + dx/2), discrete periodic problem {dper:.5f}

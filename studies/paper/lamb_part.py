@@ -372,7 +372,7 @@ series at every station).
 
 ## Fig. 8: the opening after {s['profile_step']} steps
 
-![Opening after 200 steps](figures/paper_lamb_fig8.png)
+![Opening after 200 steps](../figures/paper_lamb_fig8.png)
 
 As in the paper: the dilatational precursor (a shallow negative opening inside the
 P front, radius {s['profile_step'] * s['dt'] * 3 ** 0.5 / (1 / 512):.0f} cells), the Rayleigh front
@@ -381,14 +381,14 @@ singularity behind it. The field is clipped for display: its values run from
 {s['field_min']:.3g} to {s['field_max']:.3g} (the load node). The same field against
 distance, along x1 and along the diagonal, with Pekeris at the same time:
 
-![Opening against distance after 200 steps](figures/paper_lamb_profile.png)
+![Opening against distance after 200 steps](../figures/paper_lamb_profile.png)
 
 Along x1, over 8 to 190 cells from the load and outside the windows around the arrivals,
 the largest difference from Pekeris is {s['profile_error']:.3f} of the local static value.
 
 ## Fig. 9: the opening 64 cells from the load
 
-![Opening history 64 cells from the load](figures/paper_lamb_fig9.png)
+![Opening history 64 cells from the load](../figures/paper_lamb_fig9.png)
 
 Arrivals (dotted): P at tau = {arr['P']:.4f} (1/sqrt 3), S at {arr['S']:.4f}, R at {arr['R']:.4f}
 (c_s/c_R). The measured Rayleigh arrival (the upward zero crossing after the minimum) is
@@ -411,7 +411,7 @@ the Rayleigh arrival (the exact opening tends to -infinity there), "overshoot af
 largest opening/static - 1 after tau_R (the peak of the Gibbs ringing that follows the
 jump; the exact opening is flat there). All stations:
 
-![All stations](figures/paper_lamb_stations.png)
+![All stations](../figures/paper_lamb_stations.png)
 
 ## What agrees with the paper and what does not
 

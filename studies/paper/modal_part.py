@@ -325,7 +325,7 @@ T = 2000 at {len(GROWTH_GAMMAS)} gammas, {sec['figures']:.0f} s figures; {s['mac
 
 ## Fig. 5: the velocity response at gamma = 0.1, 1 and 2
 
-![Velocity response](figures/paper_modal_fig5.png)
+![Velocity response](../figures/paper_modal_fig5.png)
 
 Displacement / trapezoid / explicit, against the exact response (Talbot inversion of
 Eq. 41, `cracklab.analysis.exact.modal_exact`). Largest |r - r_exact|:
@@ -340,7 +340,7 @@ gamma = 1 and 2 it is damped (the artificial damping of the high modes) and lags
 
 ## Fig. 6: the precision factor of the 12 schemes
 
-![Precision factor of the 12 schemes](figures/paper_modal_fig6.png)
+![Precision factor of the 12 schemes](../figures/paper_modal_fig6.png)
 
 Precision factor: largest |r| sampled in the 10th Rayleigh period (T from 9 to 10 times
 2 pi / s_R) over the long-time amplitude {s['amplitude']:.4f} (Eq. B.5), the paper's definition
@@ -360,14 +360,14 @@ point: 1e-5 per unit T (no growth) and 5e-4 (less than a factor e over T = 2000,
 criterion of `cracklab.solver.stability`). "Band" is the largest gamma (0.05 grid) up to which
 the 10th-period precision factor stays within [0.5, 1.5].
 
-![Growth rates](figures/paper_modal_growth.png)
+![Growth rates](../figures/paper_modal_growth.png)
 
 {table(["scheme", "stable to (1e-5)", "stable to (5e-4)", "overflows from", "band pf10 in [0.5, 1.5]",
         "growth @0.5", "@1", "@2", "@2.3"], srows)}
 
 ## Fig. 7: the two retained schemes, 10th and 50th periods
 
-![Precision factors of the two retained schemes](figures/paper_modal_fig7.png)
+![Precision factors of the two retained schemes](../figures/paper_modal_fig7.png)
 
 ## What agrees with the paper and what does not
 
@@ -409,7 +409,7 @@ gamma_M = pi beta sqrt 2 = {s['gamma_M_beta_half']:.3f}; gamma = 2.3 is beta = {
 - Why the paper saw them as similar: cracklab evaluates Z = int_T^inf C_I in closed form.
   A code that tabulates Z numerically, as Z(0) minus the cumulative trapezoid of C_I on
   the step grid, turns velocity / discretized / semi-implicit into the recurrence of
-  displacement / trapezoid / explicit, up to a forcing term on r_0 (docs/stability.md:
+  displacement / trapezoid / explicit, up to a forcing term on r_0 (docs/reference/stability.md:
   identical long-time growth rates). Run that way (circles and squares in Fig. 7, the
   "cumtrapz" scheme of `studies/stability_map.py`), it damps instead of growing, and its
   precision factors stay within {s['cumtrapz']['max_abs_diff_to_default_pf10']:.2f} (10th period) and
@@ -424,7 +424,7 @@ gamma_M = pi beta sqrt 2 = {s['gamma_M_beta_half']:.3f}; gamma = 2.3 is beta = {
   {fmt(d['pf10']['2.3'])} at gamma = 2.3 after {fmt(d['pf10']['2'])} at 2). The least-squares amplitude, also in the
   store, behaves the same way there.
 - Mode I only, as in the paper. In mode II both retained schemes grow at every gamma
-  (docs/verification.md, docs/stability.md), so "gamma of about 2.3" does not carry over
+  (docs/studies/verification.md, docs/reference/stability.md), so "gamma of about 2.3" does not carry over
   to shear.
 """
     write_page("paper_modal.md", text)

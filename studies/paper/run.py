@@ -1,8 +1,8 @@
 """Reproduce figures 5 to 11 of Geubelle & Rice (1995): one command per part, or all.
 
-    nice -n 10 .venv/bin/python studies/paper/run.py modal      # Figs. 5-7   (docs/paper_modal.md)
-    nice -n 10 .venv/bin/python studies/paper/run.py lamb       # Figs. 8-9   (docs/paper_lamb.md)
-    nice -n 10 .venv/bin/python studies/paper/run.py ellipse    # Figs. 10-11 (docs/paper_elliptical.md)
+    nice -n 10 .venv/bin/python studies/paper/run.py modal      # Figs. 5-7   (docs/studies/paper_modal.md)
+    nice -n 10 .venv/bin/python studies/paper/run.py lamb       # Figs. 8-9   (docs/studies/paper_lamb.md)
+    nice -n 10 .venv/bin/python studies/paper/run.py ellipse    # Figs. 10-11 (docs/studies/paper_elliptical.md)
     nice -n 10 .venv/bin/python studies/paper/run.py all
     .venv/bin/python studies/paper/run.py PART --docs-only       # rewrite the page from out/paper/
 

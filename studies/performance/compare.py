@@ -7,7 +7,7 @@ previous commit and this one). For each round and each case, `cracklab bench --j
 runs once for A, then once for B, each in its own process with ``PYTHONPATH`` set to
 the checkout and the checkout as working directory (the bench entry point is read from
 the checkout's pyproject.toml, so a moved command-line module is found). The cases and
-settings are those of docs/performance.md: 256 x 256 mode I, 512 x 512 mode I and
+settings are those of docs/studies/performance.md: 256 x 256 mode I, 512 x 512 mode I and
 512 x 512 shear (product scheme), ``--threads 1 --engine-threads 2``, exponential engine.
 
 Per case it reports the median ms_per_step of A and of B over the rounds, their ratio
@@ -36,7 +36,7 @@ import time
 import tomllib
 from pathlib import Path
 
-#: (n1, n3, mode) of docs/performance.md's targets
+#: (n1, n3, mode) of docs/studies/performance.md's targets
 CASES = [(256, 256, "I"), (512, 512, "I"), (512, 512, "shear")]
 THREADS = ["--threads", "1", "--engine-threads", "2"]
 

@@ -1,5 +1,5 @@
 """Cost of a rate-and-state step against a slip-weakening step, the two steps alternated in
-one process (docs/equations.md, "Rate-and-state friction", Cost).
+one process (docs/reference/equations.md, "Rate-and-state friction", Cost).
 
     python studies/performance/law_cost.py [--n 256] [--steps 200] [--rounds 3] [--json OUT.json]
 

@@ -11,7 +11,7 @@ scheme: product for shear). Per case it prints the median ms per step of each va
 the in-run FFT baseline (``fft_pair_ms``; for the half plane in shear the cost per
 component of the shear pair's transform of the doubled cell), the ratios half / periodic
 and half / doubled of the medians, the min-max of the per-round ratios, and the ratio of
-the fastest rounds (the least disturbed runs of a shared host). docs/performance.md,
+the fastest rounds (the least disturbed runs of a shared host). docs/studies/performance.md,
 "Free surface by mirror symmetry", quotes its output.
 
 ``--in-process``: the three runs of a case stepped in one process instead, alternately in

@@ -1,5 +1,5 @@
 """Benchmarks of the performance issue, each a `cracklab bench` command; writes a JSON and a
-markdown table (docs/performance.md quotes it).
+markdown table (docs/studies/performance.md quotes it).
 
     .venv/bin/python studies/performance/run.py [--quick] [--out out/performance]
 

@@ -7,7 +7,7 @@ front crossing a random fracture-energy field; front roughness and its growth.
 One command: runs the ensemble through ``cracklab.ensemble.run`` on a local dask
 cluster into OUT/ensemble.zarr (a rerun skips complete members), measures the fronts
 into OUT/roughness.zarr, draws docs/figures/toughness_*.png and writes
-docs/toughness_ensemble.md from the numbers (OUT/numbers.json).
+docs/studies/toughness_ensemble.md from the numbers (OUT/numbers.json).
 """
 from __future__ import annotations
 
@@ -314,7 +314,7 @@ nice -n 10 .venv/bin/python studies/toughness_ensemble/run.py   # {wall_min:.0f}
   256 x 128 a step costs about 6 ms and there are twice as many steps: about 12 times
   the compute per member. {check_cost}
 - **Resolution** (dx = Z/{cells_per_Z}). The running cohesive zone of the mean material
-  is about 0.055 Z (docs/scenes.md), {zone_cells:.1f} cells here, and about half that
+  is about 0.055 Z (docs/reference/scenes.md), {zone_cells:.1f} cells here, and about half that
   where Gc is lowest at cov 0.3 (the zone scales with delta_c). The correlation length
   Z/16 spans {ell_cells:.0f} cells, Z/8 twice that. This is the coarsest grid on which
   the zone is still resolved by a few cells. Wavelengths along x3 shorter than about
@@ -329,18 +329,18 @@ nice -n 10 .venv/bin/python studies/toughness_ensemble/run.py   # {wall_min:.0f}
 
 ## Results
 
-![growth](figures/toughness_width_growth.png)
+![growth](../figures/toughness_width_growth.png)
 
 Left: rms width of the front against the mean propagation distance, mean over members
 and 10-90 % band. Right: the same scaled by cov x correlation length against the
 distance in correlation lengths.
 
-![spectra](figures/toughness_spectra.png)
+![spectra](../figures/toughness_spectra.png)
 
 Power spectra of the front along x3 at three propagation distances (mean and 10-90 %
 band over members).
 
-![fronts](figures/toughness_fronts.png)
+![fronts](../figures/toughness_fronts.png)
 
 One member per setting: the Gc field and the front every 0.2 Z/c_s.
 
@@ -556,7 +556,7 @@ def main(argv=None):
         meta["check_cost"] = "64 of them would have taken several times the budget."
     (out / "numbers.json").write_text(json.dumps({"settings": nums, "meta": meta, "check": check}, indent=1,
                                                  default=float))
-    write_page(nums, meta, docs / "toughness_ensemble.md")
+    write_page(nums, meta, docs / "studies" / "toughness_ensemble.md")
     print(json.dumps(nums, indent=1, default=float))
     return 0 if n_failed == 0 else 1
 

@@ -1,1 +1,1 @@
-"""SCEC TPV101 and TPV103 (docs/tpv101.md, docs/tpv103.md): ``python -m studies.tpv101.run``."""
+"""SCEC TPV101 and TPV103 (docs/studies/tpv101.md, docs/studies/tpv103.md): ``python -m studies.tpv101.run``."""

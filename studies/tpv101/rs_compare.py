@@ -1,4 +1,4 @@
-"""Comparison and acceptance of the TPV101/TPV103 study (docs/tpv101.md, docs/tpv103.md).
+"""Comparison and acceptance of the TPV101/TPV103 study (docs/studies/tpv101.md, docs/studies/tpv103.md).
 
 Plain functions on numpy arrays, checked on synthetic data with known answers
 (tests/studies/test_tpv101_study.py):

@@ -1,4 +1,4 @@
-"""docs/tpv101.md and docs/tpv103.md, written from the study's results (run.py)."""
+"""docs/studies/tpv101.md and docs/studies/tpv103.md, written from the study's results (run.py)."""
 from __future__ import annotations
 
 import math
@@ -279,9 +279,10 @@ whole space: a = 0.008 + 0.008 (1 - B(x) B(z)) (velocity weakening in a 30 km x 
 a 3 km tanh transition, strengthening outside), b 0.012, L 0.02 m, V0 1e-6 m/s, f0 0.6,
 sigma_n 120 MPa, tau0 75 MPa with the initial state sliding at V_ini = 1e-12 m/s, and the
 forced nucleation 25 MPa F(r) G(t) (R 3 km, T 1 s) at the hypocentre, 15 s.
-`cracklab.scenes.tpv101` builds it on the periodic 72 km x 36 km cell (docs/scenes.md). The
+`cracklab.scenes.tpv101` builds it on the periodic 72 km x 36 km cell (docs/reference/scenes.md). The
 reference is the same problem computed at 100 m with uguca, another spectral
-boundary-integral code (`shared/reference/tpv101_uguca/`, whose README gives its settings):
+boundary-integral code (its station files and rupture-time field, `tpv101_uguca`, with a README
+giving uguca's settings, are not in the repository):
 its stations faultst000dp075 (the hypocentre), faultst000dp030 (4.5 km up dip) and
 faultst090dp075 (9 km along strike), and its rupture-time field.
 
@@ -375,7 +376,7 @@ weakening in a whole space: a = 0.01 + 0.01 (1 - B B), b 0.014, L 0.4 m, f_w 0.2
 V_w = 0.1 + 0.9 (1 - B B) m/s, V0 1e-6 m/s, f0 0.6, sigma_n 120 MPa, tau0 40 MPa with the
 initial state sliding at V_ini = 1e-16 m/s, and the forced nucleation 45 MPa F(r) G(t)
 (R 3 km, T 1 s), 12 s; the geometry, box and stations of TPV101 (`cracklab.scenes.tpv103`,
-docs/scenes.md). There is no independent reference here: the study checks that the run is
+docs/reference/scenes.md). There is no independent reference here: the study checks that the run is
 stable to 12 s and that it converges between 100 m and 50 m.
 
 {verdict(res)}

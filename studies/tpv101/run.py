@@ -1,5 +1,5 @@
 """SCEC TPV101 and TPV103 (rate-and-state friction): convergence and, for TPV101, the
-independent spectral BI code uguca (docs/tpv101.md, docs/tpv103.md).
+independent spectral BI code uguca (docs/studies/tpv101.md, docs/studies/tpv103.md).
 
     python -m studies.tpv101.run [--problem tpv101|tpv103] [--dx 200 100 50] [-o OUT]
                                   [--domain L1 L3] [--report-only] [--force] [--quick]
@@ -15,7 +15,7 @@ with its wall time in the .json next to it; then
   convergence between 100 and 50 m;
 
 and writes OUT/<problem>_results.json (every number of the page and the acceptance),
-docs/figures/<problem>_*.png and docs/<problem>.md. The acceptance (rs_compare.check_tpv101,
+docs/figures/<problem>_*.png and docs/studies/<problem>.md. The acceptance (rs_compare.check_tpv101,
 rs_compare.check_tpv103) is the study's result: the script prints PASS or FAIL and exits 1
 when it fails, 2 when it could not be checked (a run missing).
 

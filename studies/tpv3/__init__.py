@@ -1,1 +1,1 @@
-"""SCEC TPV3 against MDSBI (docs/tpv3.md): ``python -m studies.tpv3.run``."""
+"""SCEC TPV3 against MDSBI (docs/studies/tpv3.md): ``python -m studies.tpv3.run``."""

@@ -1,4 +1,4 @@
-"""Comparison of cracklab TPV3 station series with the MDSBI reference (docs/tpv3.md).
+"""Comparison of cracklab TPV3 station series with the MDSBI reference (docs/studies/tpv3.md).
 
 The measures and the acceptance check are the slip-weakening benchmarks' own
 (``studies.benchmarks.measures``, named here too); this module adds the reference

@@ -1,4 +1,4 @@
-"""SCEC TPV3 with cracklab against the independent spectral BI code MDSBI (docs/tpv3.md).
+"""SCEC TPV3 with cracklab against the independent spectral BI code MDSBI (docs/studies/tpv3.md).
 
     python -m studies.tpv3.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
                                 [--beta B | --domain L1 L3 | --formulation product|displacement]
@@ -12,7 +12,7 @@ faultst000dp-030, 3.0 km along dip) and writes
 
 * OUT/tpv3_results.json         every number of the page, and the acceptance verdict,
 * docs/figures/tpv3_*.png       station series against MDSBI, rupture-time contours,
-* docs/tpv3.md                  the page, written from these results.
+* docs/studies/tpv3.md                  the page, written from these results.
 
 The TPV3 acceptance is the study's result: at 100 m, at both stations, rupture time
 within 0.05 s, final slip within 3 % and peak slip rate within 15 % of MDSBI; at 50 m
@@ -52,7 +52,7 @@ PRETTY = {"faultst075dp000": "faultst075dp000 (7.5 km along strike, in-plane)",
           "faultst000dp-030": "faultst000dp-030 (3.0 km along dip, anti-plane)"}
 OFFSET_KM = {"faultst075dp000": (7.5, 0.0), "faultst000dp-030": (0.0, -3.0)}
 MIRROR = {"faultst000dp-030": "faultst000dp030"}   # the same distance on the other side of the hypocentre
-LATE = 10.0               # s: the late slip after the arrivals from the fault edges (docs/tpv3.md)
+LATE = 10.0               # s: the late slip after the arrivals from the fault edges (docs/studies/tpv3.md)
 FORMULATION = "product2"  # the builder's default: the product scheme at second order in dt
 ENGINE = "exponential"
 
@@ -278,7 +278,7 @@ def _describe(meta):
 
 
 def write_page(res, dxs, page, figrel, notes_path=None, command=None):
-    """docs/tpv3.md from the results; the discussion (``discussion.md`` next to this
+    """docs/studies/tpv3.md from the results; the discussion (``discussion.md`` next to this
     script, {placeholders} filled from the results) follows the tables."""
     cmd = command or "python -m studies.tpv3.run"
     text = f"""# SCEC TPV3 against MDSBI
@@ -293,7 +293,8 @@ slip-weakening friction (mu_s = 0.677, mu_d = 0.525, D_c = 0.4 m, 120 MPa normal
 70 MPa initial shear stress and 81.6 MPa on a 3 km x 3 km square around the hypocentre.
 `cracklab.scenes.tpv3` builds it in a periodic 48 km x 24 km domain (the plane outside
 the fault is bonded). The reference is two on-fault stations computed at 100 m with
-MDSBI, E. M. Dunham's spectral boundary-integral code (`shared/reference/tpv3_mdsbi`):
+MDSBI, E. M. Dunham's spectral boundary-integral code (its files, `tpv3_mdsbi`, are the
+SCEC/USGS benchmark's results, scecdata.usc.edu/cvws, not in the repository):
 faultst075dp000, 7.5 km along strike from the hypocentre (in-plane, mode II), and
 faultst000dp-030, 3.0 km along dip (anti-plane, mode III). Both are stations of
 `scenes.tpv3` under these names. All comparisons use the strike (h) components.

@@ -1,1 +1,1 @@
-"""SCEC TPV5 against MDSBI (docs/tpv5.md): ``python -m studies.tpv5.run``."""
+"""SCEC TPV5 against MDSBI (docs/studies/tpv5.md): ``python -m studies.tpv5.run``."""

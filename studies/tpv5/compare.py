@@ -1,4 +1,4 @@
-"""Comparison of cracklab TPV5 station series with the MDSBI reference (docs/tpv5.md).
+"""Comparison of cracklab TPV5 station series with the MDSBI reference (docs/studies/tpv5.md).
 
 The series measures and the acceptance check are TPV3's (``studies.benchmarks.measures``:
 one definition of rupture time, final slip, peak slip rate and of the

@@ -1,4 +1,4 @@
-"""SCEC TPV5 with cracklab against the independent spectral BI code MDSBI (docs/tpv5.md).
+"""SCEC TPV5 with cracklab against the independent spectral BI code MDSBI (docs/studies/tpv5.md).
 
     python -m studies.tpv5.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
                                 [--beta B | --domain L1 L3 | --step-cost B1 B2 ...] [--formulation product]
@@ -13,7 +13,7 @@ faultst000dp075 the hypocentre, faultst-075dp075 and faultst075dp075 the centres
 
 * OUT/tpv5_results.json         every number of the page, and the acceptance verdict,
 * docs/figures/tpv5_*.png       station series against MDSBI, rupture-time contours,
-* docs/tpv5.md                  the page, written from these results.
+* docs/studies/tpv5.md                  the page, written from these results.
 
 The acceptance is the study's result (``compare.check_acceptance``, TPV3's): at 100 m, at
 the five stations, rupture time within 0.05 s, final slip within 3 % and peak slip rate
@@ -29,7 +29,7 @@ the same problem into OUT/beta<B> or OUT/domain<L1>x<L3>km, together with the ma
 run at the same dx if it is missing (its baseline), and write no page; the main page then
 shows them next to the main runs. ``--formulation product`` (with ``--beta B`` or alone)
 runs the same problem with the first-order product scheme (the law's slip path by the
-rectangle rule, docs/stability.md) into OUT/product[_beta<B>], shown next to the main runs
+rectangle rule, docs/reference/stability.md) into OUT/product[_beta<B>], shown next to the main runs
 as well. ``--step-cost B1 B2`` measures the cost of a 100 m step at each beta in one
 sitting (alternated rounds) into OUT/step_cost.json, which the page uses to say what a
 smaller beta costs. Time stepping of the main runs: tpv5's own (product2, the product
@@ -64,7 +64,7 @@ FORMULATION = "product2"  # the builder's default: the product scheme at second 
 ENGINE = "exponential"
 DOMAIN = (48000.0, 24000.0)
 BETA_SHOWN = 0.5          # a fitted beta beyond this lies past any builder's beta (at most 0.5): shown as "> 0.5"
-SCATTER = 0.005           # s: the 1 mm/s crossing scatters by a few ms about its limit (docs/stability.md)
+SCATTER = 0.005           # s: the 1 mm/s crossing scatters by a few ms about its limit (docs/reference/stability.md)
 
 
 def numerics(formulation=None):
@@ -431,7 +431,7 @@ def _check_commands(res):
 
 
 def write_page(res, dxs, page, figrel, notes_path=None, command=None):
-    """docs/tpv5.md from the results; the discussion (``discussion.md`` next to this
+    """docs/studies/tpv5.md from the results; the discussion (``discussion.md`` next to this
     script, {placeholders} filled from the results) follows the tables."""
     cmd = command or "python -m studies.tpv5.run"
     L1, L3 = res["runs"][f"{dxs[0]:g}"]["domain"]
@@ -453,7 +453,8 @@ strike. `cracklab.scenes.tpv5` builds it with the free surface by mirror symmetr
 along strike (periodic) by {L3 / 1e3:g} km deep, and stands for the whole space with the fault
 and its loads mirrored about the surface, as MDSBI (and every spectral BI code) models
 TPV5. The reference is five on-fault stations computed at 100 m with MDSBI, E. M. Dunham's
-spectral boundary-integral code (`shared/reference/tpv5_mdsbi`); `scenes.tpv5` records them
+spectral boundary-integral code (its files, `tpv5_mdsbi`, are the SCEC/USGS benchmark's
+results, scecdata.usc.edu/cvws, not in the repository); `scenes.tpv5` records them
 under the same names (`st`: strike from the hypocentre, `dp`: depth below the surface,
 in units of 100 m). All comparisons use the strike (h) components.
 
@@ -663,7 +664,7 @@ def _variant_sentences(res):
                     + (": the lag is the time step's." if a < 0.2 * share else "."))
         if a < SCATTER and share < SCATTER:
             timestep += (f" Both are within the {1e3 * SCATTER:.0f} ms by which the 1 mm/s crossing scatters about "
-                         f"its limit (docs/stability.md, \"The order of a rupture front\"): the fit resolves "
+                         f"its limit (docs/reference/stability.md, \"The order of a rupture front\"): the fit resolves "
                          f"neither, and its largest beta within 0.05 s is an extrapolation.")
         if within == float("inf") or within >= base_meta["beta"]:
             timestep += " The builder's beta already holds the 0.05 s limit at every station."

@@ -1,2 +1,2 @@
-"""SCEC TPV6 against MDSBI (docs/tpv6.md): ``python -m studies.tpv6.run``; its surface study
+"""SCEC TPV6 against MDSBI (docs/studies/tpv6.md): ``python -m studies.tpv6.run``; its surface study
 ``python -m studies.tpv6.surface``."""

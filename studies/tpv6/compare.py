@@ -1,4 +1,4 @@
-"""Comparison of cracklab TPV6 station series with the MDSBI reference (docs/tpv6.md).
+"""Comparison of cracklab TPV6 station series with the MDSBI reference (docs/studies/tpv6.md).
 
 Plain functions on 1-D numpy arrays, checked on synthetic series with known answers
 (tests/studies/test_tpv6_study.py). The series measures (rupture time, peak, final value,

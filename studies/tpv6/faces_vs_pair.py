@@ -4,7 +4,7 @@ bimaterial path): each station's peak slip rate and final slip, side by side.
 
     python studies/tpv6/faces_vs_pair.py DX [T_END]
 
-docs/tpv6.md ("Discussion") quotes its output at 400, 200 and 100 m: it tells whether the
+docs/studies/tpv6.md ("Discussion") quotes its output at 400, 200 and 100 m: it tells whether the
 faces' machinery or the contrast of materials makes the peak slip rate grow with the grid.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""SCEC TPV6 (a bimaterial fault under a free surface) with cracklab against MDSBI (docs/tpv6.md).
+"""SCEC TPV6 (a bimaterial fault under a free surface) with cracklab against MDSBI (docs/studies/tpv6.md).
 
     python -m studies.tpv6.run [--dx 100 [50]] [-o OUT] [--quick] [--report-only] [--force]
 
@@ -10,7 +10,7 @@ stations (shared/reference/tpv6_mdsbi, or ``--reference DIR``) and writes
 
 * OUT/tpv6_results.json         every number of the page, and the acceptance verdict,
 * docs/figures/tpv6_*.png       station series against MDSBI, rupture-time contours,
-* docs/tpv6.md                  the page, written from these results.
+* docs/studies/tpv6.md                  the page, written from these results.
 
 The TPV6 acceptance (issue 18) is the study's result: at 100 m, at the five stations,
 rupture time within 0.1 s, final slip within 5 %, peak slip rate within 20 % of MDSBI and
@@ -307,7 +307,7 @@ def law_setting(res):
     if "normal_time" in normal:
         parts.append(f"time scale t* = `normal_time` = {normal['normal_time']:g} s")
     return ("The friction law's strength uses the **regularised normal stress** sigma* (Prakash-Clifton, "
-            "docs/equations.md \"Regularised normal stress\"): " + " and ".join(parts) + "." + other)
+            "docs/reference/equations.md \"Regularised normal stress\"): " + " and ".join(parts) + "." + other)
 
 
 def other_rows(res, dxs):
@@ -452,7 +452,8 @@ symmetry, `Grid(free_surface=True)`), 48 km along strike by 24 km deep, the plan
 the fault bonded; each side is its own half space (`solver/interfaces/bimaterial.py`),
 and each side's face motion is recorded (`Record` fields `u_1_top`, `u_1_bottom`, ...).
 The reference is MDSBI (E. M. Dunham's spectral boundary-integral code) at 100 m
-(`shared/reference/tpv6_mdsbi`): five on-fault stations, each side's face displacement
+(its files, `tpv6_mdsbi`, are the SCEC/USGS benchmark's results, scecdata.usc.edu/cvws,
+not in the repository): five on-fault stations, each side's face displacement
 and velocity and the traction, and the rupture-time contours.
 
 {law_setting(res)}
@@ -468,12 +469,10 @@ and velocity and the traction, and the rupture-time contours.
 Wall times on the project's 2-core machine shared with other long jobs (not a benchmark).
 The set-up is the history engines' exact taps of the four face kernels (H11, H22, H12,
 III) of each side for every distinct gamma, read from the kernels' Chebyshev tables
-(solver/face_kernels.py); it was 6, 15 and 24 min at 400, 200 and 100 m when every tap
-summed the branch cuts (the 200 m set-up alone: 957 s then, 3.8 s now, on the same host in
-one sitting; docs/performance.md, "Bimaterial interface").
+(elastic/face_kernels.py; docs/studies/performance.md, "Bimaterial interface").
 Time stepping: `Numerics(formulation="{FORMULATION}", engine="{ENGINE}")`, the product
 scheme with the law at the step's mean velocity (rupture fronts at second order in dt,
-docs/stability.md "The order of a rupture front") at the builder's beta (relative to the near side's c_s, which sets dt).
+docs/reference/stability.md "The order of a rupture front") at the builder's beta (relative to the near side's c_s, which sets dt).
 {"Runs stopped by the solver: " + ", ".join(stopped) + "." if stopped else ""}
 
 ## Acceptance

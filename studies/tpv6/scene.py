@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from studies.benchmarks import harness as H
 
-FORMULATION = "product2"  # the builder's: rupture fronts at second order in dt (docs/stability.md)
+FORMULATION = "product2"  # the builder's: rupture fronts at second order in dt (docs/reference/stability.md)
 ENGINE = "exponential"
 FACES = tuple(f"{k}_{c}_{side}" for k in ("u", "v") for side in ("top", "bottom") for c in (1, 2, 3))
 

@@ -1,4 +1,4 @@
-"""TPV6's surface stations: where the peak slip rate grows with the grid, and why (docs/tpv6.md,
+"""TPV6's surface stations: where the peak slip rate grows with the grid, and why (docs/studies/tpv6.md,
 "The surface stations").
 
     python -m studies.tpv6.surface [--dx 400 200 100] [-o OUT] [--t-end 7.0]

@@ -14,7 +14,7 @@ def test_demo_study_is_the_checkouts_study_file():
 def test_the_demo_runs_the_ensemble_then_lamb_and_writes_what_getting_started_names(tmp_path, monkeypatch,
                                                                                      capsys):
     """`cracklab demo` (on a one-member study of small grids, and Lamb on 32 x 32): the
-    ensemble first, then Lamb's problem, as docs/getting_started.md's "First run" says,
+    ensemble first, then Lamb's problem, as docs/guide/getting_started.md's "First run" says,
     writing every output that paragraph names; the summary figure's title counts
     "1 member" in the singular."""
     import re
@@ -22,7 +22,7 @@ def test_the_demo_runs_the_ensemble_then_lamb_and_writes_what_getting_started_na
     from cracklab import plots
     from cracklab.cli import demo
 
-    text = (ROOT / "docs" / "getting_started.md").read_text()
+    text = (ROOT / "docs" / "guide" / "getting_started.md").read_text()
     first_run = text.split("## First run", 1)[1].split("\n## ", 1)[0]
     named = sorted(set(re.findall(r"`out/([\w.]+)`", first_run)))
     assert {"ensemble.zarr", "lamb.zarr", "lamb.png", "ensemble_random.gif"} <= set(named), named

@@ -1,4 +1,4 @@
-"""docs/api.md is what docs/tools/api_page.py writes from the live signatures and
+"""docs/reference/api.md is what docs/tools/api_page.py writes from the live signatures and
 docstrings, and it lists every public name of cracklab."""
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import cracklab
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGE = ROOT / "docs" / "api.md"
+PAGE = ROOT / "docs" / "reference" / "api.md"
 
 
 def generator():
@@ -21,7 +21,7 @@ def generator():
 
 def test_api_page_is_up_to_date():
     text = generator().render()
-    assert PAGE.read_text() == text, "docs/api.md is out of date: run python docs/tools/api_page.py"
+    assert PAGE.read_text() == text, "docs/reference/api.md is out of date: run python docs/tools/api_page.py"
 
 
 def test_api_page_is_deterministic_and_complete():
@@ -31,7 +31,7 @@ def test_api_page_is_deterministic_and_complete():
     entries = set(re.findall(r"^- `([\w.]+)", text, flags=re.M))
     modules = {"analysis", "ensemble", "kernels", "scenes", "__version__"}
     for name in sorted(set(cracklab.__all__) - modules):
-        assert f"cracklab.{name}" in entries, f"cracklab.{name} is not on docs/api.md"
+        assert f"cracklab.{name}" in entries, f"cracklab.{name} is not on docs/reference/api.md"
     for builder in cracklab.scenes.BUILDERS:
         assert f"cracklab.scenes.{builder}" in entries, builder
     from cracklab.cli import main
@@ -47,4 +47,4 @@ def test_every_entry_has_a_summary():
 
 
 def test_api_page_is_linked_from_the_index():
-    assert "](api.md)" in (ROOT / "docs" / "index.md").read_text()
+    assert "](reference/api.md)" in (ROOT / "docs" / "index.md").read_text()

@@ -1,5 +1,5 @@
 """The documentation stays true: its examples run, and the verification table in
-docs/verification.md matches the registry in tests/verification.py."""
+docs/studies/verification.md matches the registry in tests/verification.py."""
 from __future__ import annotations
 
 import contextlib
@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
-EXAMPLE_PAGES = ("README.md", "docs/getting_started.md")
+EXAMPLE_PAGES = ("README.md", "docs/guide/getting_started.md")
 FENCE = re.compile(r"^```([\w-]*)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
 
 
@@ -55,12 +55,12 @@ def test_readme_output_is_what_the_example_prints(tmp_path, monkeypatch):
 
 def test_bad_input_output_is_what_the_example_prints(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code = [b for b in blocks("docs/getting_started.md", "python") if "except InputError" in b]
+    code = [b for b in blocks("docs/guide/getting_started.md", "python") if "except InputError" in b]
     assert len(code) == 1
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         exec(compile(code[0], "bad-input example", "exec"), {"__name__": "__docs__"})
-    shown = [b for b in blocks("docs/getting_started.md", "text") if "grid.n3" in b]
+    shown = [b for b in blocks("docs/guide/getting_started.md", "text") if "grid.n3" in b]
     assert shown and [line.rstrip() for line in out.getvalue().strip().splitlines()] == \
         [line.rstrip() for line in shown[0].strip().splitlines()]
 
@@ -76,9 +76,9 @@ def test_toml_scene_runs_from_the_command_line(tmp_path, monkeypatch):
     """The TOML scene of getting_started.md, with the two `cracklab run` commands shown there."""
     from cracklab.cli import main
 
-    (toml,) = blocks("docs/getting_started.md", "toml")
+    (toml,) = blocks("docs/guide/getting_started.md", "toml")
     tomllib.loads(toml)
-    (sh,) = [b for b in blocks("docs/getting_started.md", "sh") if "cracklab run" in b]
+    (sh,) = [b for b in blocks("docs/guide/getting_started.md", "sh") if "cracklab run" in b]
     monkeypatch.chdir(tmp_path)
     (tmp_path / "scene.toml").write_text(toml)
     for line in sh.strip().splitlines():
@@ -102,8 +102,13 @@ def anchors(page: Path) -> set[str]:
     return out
 
 
+def doc_pages() -> list[Path]:
+    """The Markdown pages of docs/ (in its folders; not the site's build or gallery)."""
+    return sorted(p for p in DOCS.rglob("*.md") if not {"_build", "gallery"} & set(p.relative_to(DOCS).parts))
+
+
 def test_docs_links_resolve():
-    pages = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
+    pages = [ROOT / "README.md", *doc_pages()]
     for page in pages:
         text = "\n".join(line for line in FENCE.sub("", page.read_text()).splitlines()
                          if not line.startswith("    "))  # indented code
@@ -112,17 +117,19 @@ def test_docs_links_resolve():
             if "://" in target:
                 continue
             assert (page.parent / target).exists(), f"{page.name}: broken link {target}"
+            assert (page.parent / target).resolve().is_relative_to(ROOT), f"{page.name}: links outside the repository: {target}"
             if anchor:
                 assert anchor in anchors(page.parent / target), f"{page.name}: broken anchor {target}#{anchor}"
     index = (DOCS / "index.md").read_text()
-    for page in DOCS.glob("*.md"):
-        if page.name != "index.md":
-            assert f"]({page.name}" in index, f"docs/index.md does not link {page.name}"
+    for page in doc_pages():
+        rel = page.relative_to(DOCS).as_posix()
+        if rel not in ("index.md", "site/readme.md"):
+            assert f"]({rel})" in index, f"docs/index.md does not link {rel}"
 
 
 # ----------------------------------------------------------------------------- verification
 def table() -> dict:
-    return verification.parse_table((DOCS / "verification.md").read_text())
+    return verification.parse_table((DOCS / "studies" / "verification.md").read_text())
 
 
 def test_registry_rows_are_well_formed():
@@ -144,8 +151,8 @@ def test_registry_rows_are_well_formed():
 def test_every_row_is_in_the_docs_with_its_tolerance():
     rows = table()
     assert list(rows) == [r[0] for r in verification.ROWS], \
-        "docs/verification.md rows differ from tests/verification.py ROWS; rerun with " \
-        "CRACKLAB_WRITE_VERIFICATION=1 (see docs/verification.md)"
+        "docs/studies/verification.md rows differ from tests/verification.py ROWS; rerun with " \
+        "CRACKLAB_WRITE_VERIFICATION=1 (see docs/studies/verification.md)"
     for rid, nodeid, reference, quantity, tol in verification.ROWS:
         cells = rows[rid]
         assert cells["test"] == verification.first_cell((rid, nodeid)), rid
@@ -210,7 +217,7 @@ def markdown_tables(text: str) -> list[list[str]]:
 def test_stability_table_matches_cracklab_stability():
     from cracklab.solver.stability import gamma_max
 
-    text = (DOCS / "equations.md").read_text()
+    text = (DOCS / "reference" / "equations.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| scheme | mode I")]
     shown = {}
     for line in tab[2:]:
@@ -224,7 +231,7 @@ def test_stability_nu_table_matches_cracklab_stability():
     """The table of limits against nu in stability.md is cracklab.solver.stability.LIMITS."""
     from cracklab.solver.stability import LIMITS, NU_NODES
 
-    text = (DOCS / "stability.md").read_text()
+    text = (DOCS / "reference" / "stability.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| nu |")]
     cols = [c.strip().split() for c in tab[0].strip("|").split("|")[1:]]
     rows = [[float(c) for c in line.strip("|").split("|")] for line in tab[2:]]
@@ -235,10 +242,10 @@ def test_stability_nu_table_matches_cracklab_stability():
 
 
 def test_every_law_has_its_row_in_the_toml_reference():
-    """docs/scenes.md lists every registered law with exactly its parameters and state."""
+    """docs/reference/scenes.md lists every registered law with exactly its parameters and state."""
     from cracklab.laws import LAWS
 
-    text = (DOCS / "scenes.md").read_text()
+    text = (DOCS / "reference" / "scenes.md").read_text()
     (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| kind | class | acts on")]
     rows = {}
     for line in tab[2:]:
@@ -262,7 +269,7 @@ def test_modal_scheme_tables_match_the_study():
     spec.loader.exec_module(study)
     pfs = {(s, g): study.pf(s, g) for s in study.SCHEMES for g in study.GAMMAS}
     rates = {(s, g): study.growth(s, g) for s in study.SCHEMES for g in study.GAMMAS}
-    tables = ["\n".join(t) for t in markdown_tables((DOCS / "verification.md").read_text())]
+    tables = ["\n".join(t) for t in markdown_tables((DOCS / "studies" / "verification.md").read_text())]
     assert study.markdown(pfs, study.fmt_pf) in tables
     assert study.markdown(rates, study.fmt_growth) in tables
 
@@ -272,27 +279,27 @@ def test_periodic_crack_example_prints_what_the_page_says(tmp_path, monkeypatch)
     """getting_started's plane periodic-crack example, run alone: the slip it prints is the
     one the paragraph above it quotes (0.5773 against 0.5722), within 1 % of exact."""
     monkeypatch.chdir(tmp_path)
-    (code,) = [b for b in blocks("docs/getting_started.md", "python") if "periodic_row_opening" in b]
+    (code,) = [b for b in blocks("docs/guide/getting_started.md", "python") if "periodic_row_opening" in b]
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         exec(compile(code, "periodic-crack example", "exec"), {"__name__": "__docs__"})
     m = re.fullmatch(r"1 centre slip (\d\.\d{4}), exact (\d\.\d{4})", out.getvalue().strip())
     assert m, out.getvalue()
     slip, exact = m.groups()
-    text = (ROOT / "docs" / "getting_started.md").read_text()
+    text = (ROOT / "docs" / "guide" / "getting_started.md").read_text()
     assert f"({slip} against {exact})" in text, (slip, exact)
     assert abs(float(slip) / float(exact) - 1) < 0.01
 
 
 def test_ensembles_quick_start_runs_alone(tmp_path, monkeypatch):
-    """docs/ensembles.md's quick start: its study is the demo's study file, and its Python
+    """docs/guide/ensembles.md's quick start: its study is the demo's study file, and its Python
     block runs on its own in a fresh namespace (its imports suffice) on that study with
     smaller grids, printing the table of diameter, contrast and final crack length."""
     import functools
 
     from cracklab import ensemble
 
-    text = (DOCS / "ensembles.md").read_text()
+    text = (DOCS / "guide" / "ensembles.md").read_text()
     quick = text.split("## Quick start", 1)[1].split("\n## ", 1)[0]
     study = [body for tag, body in FENCE.findall(quick) if tag == "toml"][0]
     assert tomllib.loads(study) == tomllib.loads((ROOT / "studies" / "asperity_ensemble" / "study.toml").read_text())
@@ -307,7 +314,7 @@ def test_ensembles_quick_start_runs_alone(tmp_path, monkeypatch):
                                                                  progress=False))
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code, "docs/ensembles.md, quick start", "exec"), {"__name__": "__docs__"})
+        exec(compile(code, "docs/guide/ensembles.md, quick start", "exec"), {"__name__": "__docs__"})
     lines = out.getvalue().splitlines()
     assert lines[0].startswith("9 members: 9 ran"), lines[0]
     header = next(line for line in lines if "crack_length" in line).split()
@@ -339,8 +346,100 @@ def test_the_demo_times_agree_between_readme_and_getting_started():
     """The demo's run time is a measurement on a quiet host, which no test can repeat; the
     two pages that quote it quote the same figures."""
     readme = (ROOT / "README.md").read_text().split("## Quick start", 1)[1].split("\n## ", 1)[0]
-    first = (ROOT / "docs" / "getting_started.md").read_text().split("## First run", 1)[1].split("\n## ", 1)[0]
+    first = (ROOT / "docs" / "guide" / "getting_started.md").read_text().split("## First run", 1)[1].split("\n## ", 1)[0]
 
     def times(text):
         return re.findall(r"about (\d+) s[^(]*\((\d+) s the first time", " ".join(text.split()))
     assert times(readme) and times(readme) == times(first), (times(readme), times(first))
+
+
+# ----------------------------------------------------------------------------- lists the code holds
+def section(text: str, heading: str) -> str:
+    """The body of the section under a Markdown heading (up to the next heading of any level)."""
+    body = text.split(heading + "\n", 1)[1]
+    return re.split(r"^#{1,6} ", body, maxsplit=1, flags=re.M)[0]
+
+
+def test_getting_started_builder_table_lists_every_builder():
+    from cracklab.scenes import BUILDERS
+
+    text = (DOCS / "guide" / "getting_started.md").read_text()
+    (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| builder | problem")]
+    names = [re.match(r"\| `(\w+)\(", line).group(1) for line in tab[2:]]
+    assert names == list(BUILDERS), names
+    # the arguments shown are the builder's: `k=` a required one, `k=v` its default
+    import ast
+    import inspect
+
+    from cracklab import scenes
+
+    for line in tab[2:]:
+        name, args = re.match(r"\| `(\w+)\((.*?)\)` \|", line).groups()
+        params = inspect.signature(getattr(scenes, name)).parameters
+        for arg in (a.strip() for a in re.split(r",\s*(?![^()]*\))", args) if a.strip() not in ("", "...")):
+            key, _, value = arg.partition("=")
+            assert key in params, (name, key)
+            if value:
+                assert ast.literal_eval(value) == params[key].default, (name, key, value)
+            else:
+                assert params[key].default is inspect.Parameter.empty, (name, key)
+
+
+def test_ensembles_lists_every_builder_and_the_refusal_names_them():
+    from cracklab.scenes import BUILDERS
+
+    text = (DOCS / "guide" / "ensembles.md").read_text()
+    own = " ".join(section(text, "### Your own builders").split("2. builders registered")[0].split())
+    listed = re.findall(r"`(\w+)`", own.split("`cracklab.scenes.BUILDERS`:", 1)[1])
+    assert listed == list(BUILDERS), listed
+    (error,) = [b for tag, b in FENCE.findall(text) if tag == "text" and "is not a scene builder" in b]
+    registered = error.split("registered: ", 1)[1].split(". Register", 1)[0].split(", ")
+    assert registered == sorted(BUILDERS), registered
+
+
+def test_getting_started_command_table_lists_every_command():
+    from cracklab.cli import main
+
+    text = (DOCS / "guide" / "getting_started.md").read_text()
+    (tab,) = [t for t in markdown_tables(text) if t[0].startswith("| command | what it does")]
+    commands = {re.match(r"\| `cracklab (\w+)", line).group(1) for line in tab[2:]}
+    assert commands == set(main.commands), commands ^ set(main.commands)
+
+
+def test_builder_signatures_on_the_scenes_page_are_the_code_s():
+    """Every `scenes.NAME(*, ...)` block of scenes.md has the builder's parameters and
+    defaults, in order."""
+    import ast
+    import inspect
+
+    from cracklab import scenes
+
+    text = (DOCS / "reference" / "scenes.md").read_text()
+    calls = re.findall(r"^scenes\.(\w+)(\(\*,.*?\))\s*$", "\n".join(b for tag, b in FENCE.findall(text)
+                                                                     if tag == "python"), flags=re.M | re.S)
+    assert {"asperity_row", "random_toughness", "tpv5", "tpv6", "tpv101", "tpv103"} <= {n for n, _ in calls}
+    for name, args in calls:
+        tree = ast.parse(f"def f{args}: pass").body[0].args
+        shown = {a.arg: ast.literal_eval(d) for a, d in zip(tree.kwonlyargs, tree.kw_defaults)}
+        params = inspect.signature(getattr(scenes, name)).parameters
+        assert list(shown) == list(params), name
+        for p, value in shown.items():
+            default = params[p].default
+            if default is inspect.Parameter.empty:
+                continue
+            assert value == default, (name, p, value, default)
+
+
+def test_no_page_names_a_file_outside_the_repository():
+    for page in [ROOT / "README.md", *doc_pages()]:
+        text = page.read_text()
+        assert not re.search(r"shared/(reference|API\.md)", text), f"{page.name} names a file outside the repository"
+
+
+def test_the_demo_time_on_the_ensembles_page_is_the_readme_s():
+    readme = (ROOT / "README.md").read_text().split("## Quick start", 1)[1].split("\n## ", 1)[0]
+    demo = section((DOCS / "guide" / "ensembles.md").read_text(), "## The demo")
+
+    def times(text):
+        return re.findall(r"about (\d+) s[^(]*\((\d+) s the first time", " ".join(text.split()))
+    assert times(readme) and times(readme) == times(demo), (times(readme), times(demo))

@@ -41,8 +41,9 @@ def site(tmp_path_factory) -> Path:
 
 def test_every_page_is_on_the_site(site):
     """The glob toctree of docs/index.md takes every Markdown page, including new ones."""
-    pages = sorted(p.stem for p in DOCS.glob("*.md"))
-    assert "getting_started" in pages and "api" in pages
+    pages = sorted(p.relative_to(DOCS).with_suffix("").as_posix() for p in DOCS.rglob("*.md")
+                   if not {"_build", "gallery"} & set(p.relative_to(DOCS).parts))
+    assert "guide/getting_started" in pages and "reference/api" in pages
     for stem in pages:
         assert (site / f"{stem}.html").is_file(), stem
     nav = (site / "index.html").read_text()
@@ -53,11 +54,11 @@ def test_every_page_is_on_the_site(site):
 
 
 def test_api_reference_has_every_public_name(site):
-    """Every name of docs/api.md has its autodoc entry (an anchor) on the reference page."""
+    """Every name of docs/reference/api.md has its autodoc entry (an anchor) on the reference page."""
     import cracklab
 
-    html = (site / "reference" / "index.html").read_text()
-    listed = (DOCS / "api.md").read_text().split("\n## Promised", 1)[0]  # not the missing ones
+    html = (site / "reference" / "docstrings.html").read_text()
+    listed = (DOCS / "reference" / "api.md").read_text().split("\n## Promised", 1)[0]  # not the missing ones
     names = re.findall(r"^- `(cracklab\.[\w.]+)", listed, flags=re.M)
     assert len(names) > 50
     for name in names:
@@ -87,9 +88,9 @@ def test_gallery_runs_its_examples(site):
 
 def test_links_between_pages_resolve(site):
     """Markdown links between pages (with GitHub-style anchors) are links on the site."""
-    html = (site / "getting_started.html").read_text()
+    html = (site / "guide" / "getting_started.html").read_text()
     assert 'href="environment.html"' in html
-    assert 'href="stability.html#limits-for-every-poisson-ratio"' in html
+    assert 'href="../reference/stability.html#limits-for-every-poisson-ratio"' in html
     readme = (site / "index.html").read_text()
     assert 'href="site/readme.html"' in readme  # [README](../README.md)
 
@@ -120,3 +121,12 @@ def test_a_broken_link_or_reference_fails_the_build(tmp_path):
     assert any("cracklab.no_such_function" in w for w in warnings), res.stderr
     assert not any("solve_velocity" in w for w in warnings), res.stderr
     assert len(warnings) == 3, res.stderr
+
+
+def test_the_sidebar_lists_each_page_once(site):
+    """The site's navigation names each page once: one "API reference" (the docstrings),
+    besides the one-line "API summary"."""
+    nav = (site / "index.html").read_text().split('class="sphinxsidebar"', 1)[1]
+    titles = re.findall(r'<a class="reference internal" href="[^"#]+">([^<]+)</a>', nav)
+    assert titles.count("API reference") == 1 and titles.count("API summary") == 1, titles
+    assert len(titles) == len(set(titles)), titles

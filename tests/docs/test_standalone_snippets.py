@@ -1,4 +1,4 @@
-"""A Python example of docs/scenes.md that begins with its imports runs on its own, in a
+"""A Python example of docs/reference/scenes.md that begins with its imports runs on its own, in a
 fresh namespace (a reader copies one block, not the page)."""
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ def standalone_blocks(page: str) -> list[tuple[int, str]]:
     return out
 
 
-BLOCKS = standalone_blocks("docs/scenes.md")
+BLOCKS = standalone_blocks("docs/reference/scenes.md")
 
 
 def test_the_front_analysis_example_is_among_them():
@@ -32,4 +32,4 @@ def test_the_front_analysis_example_is_among_them():
 @pytest.mark.parametrize("line,body", BLOCKS, ids=[f"line{line}" for line, _ in BLOCKS])
 def test_block_runs_alone(line, body, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    exec(compile(body, f"docs/scenes.md, python block at line {line}", "exec"), {"__name__": "__docs__"})
+    exec(compile(body, f"docs/reference/scenes.md, python block at line {line}", "exec"), {"__name__": "__docs__"})

@@ -1,4 +1,4 @@
-"""docs/toml.md is what docs/tools/toml_page.py writes from the law and scene definitions;
+"""docs/reference/toml.md is what docs/tools/toml_page.py writes from the law and scene definitions;
 its examples are valid scenes, it lists every key, and the ranges it states are the ones
 the validation enforces."""
 from __future__ import annotations
@@ -21,7 +21,7 @@ from cracklab.model.keys import SECTION_KEYS, TOP_KEYS, UNIT_KEYS
 from cracklab.model.scene_io import scene_from_data, section_classes
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGE = ROOT / "docs" / "toml.md"
+PAGE = ROOT / "docs" / "reference" / "toml.md"
 INF, NAN = math.inf, math.nan
 
 
@@ -38,7 +38,7 @@ EXAMPLES = {tomllib.loads(body)["law"]["kind"]: body for body in GEN.examples_of
 
 
 def test_toml_page_is_up_to_date():
-    assert TEXT == GEN.render(), "docs/toml.md is out of date: run python docs/tools/toml_page.py"
+    assert TEXT == GEN.render(), "docs/reference/toml.md is out of date: run python docs/tools/toml_page.py"
 
 
 def test_every_example_on_the_page_is_a_valid_scene_one_per_law():
@@ -170,5 +170,5 @@ def test_section_ranges_on_the_page_are_the_checks(section):
 
 
 def test_toml_page_is_linked():
-    assert "](toml.md)" in (ROOT / "docs" / "index.md").read_text()
-    assert "](toml.md)" in (ROOT / "docs" / "scenes.md").read_text()
+    assert "](reference/toml.md)" in (ROOT / "docs" / "index.md").read_text()
+    assert "](toml.md)" in (ROOT / "docs" / "reference" / "scenes.md").read_text()

@@ -252,14 +252,14 @@ def test_cli_sweep_import_registers_the_builders_of_a_module(tmp_path, monkeypat
 
 
 def test_docs_ensembles_own_builders_example_runs(tmp_path, monkeypatch, registry):
-    """The example of docs/ensembles.md, "Your own builders", prints what the page shows,
+    """The example of docs/guide/ensembles.md, "Your own builders", prints what the page shows,
     and the refusal shown there is the message of that name."""
     import contextlib
     import io
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "docs" / "ensembles.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "ensembles.md").read_text()
     section = text.split("### Your own builders", 1)[1].split("\n### ", 1)[0]
     fence = re.compile(r"^```([\w-]*)[ \t]*\n(.*?)^```[ \t]*$", re.S | re.M)
     found = fence.findall(section)
@@ -268,11 +268,12 @@ def test_docs_ensembles_own_builders_example_runs(tmp_path, monkeypatch, registr
     monkeypatch.chdir(tmp_path)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(code, "docs/ensembles.md", "exec"), {"__name__": "__docs__"})
+        exec(compile(code, "docs/guide/ensembles.md", "exec"), {"__name__": "__docs__"})
     assert out.getvalue().strip() == shown[1].strip()
     with pytest.raises(InputError) as err:
         E.resolve_builder("os:system", "study.builder")
     shown_error = shown[0].strip().removeprefix("Error: ")
     names = ", ".join(sorted(E.registered_builders()))
     assert str(err.value) == shown_error.replace(
-        "asperity_row, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv3", names)
+        "asperity_row, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv101, tpv102, "
+        "tpv103, tpv104, tpv3, tpv5, tpv6", names)

@@ -1,6 +1,6 @@
 """The exponential-sum history engine (cracklab.history.exponential) and its kernel fits.
 
-Bounds used below (see docs/fast_engine.md):
+Bounds used below (see docs/reference/fast_engine.md):
 - representation: |K_fit - K| <= 1e-4 |K(0)| for T >= T0, and the fit's own target
   tol * scale (tol = 1e-5, 5e-6 for mode II; scale = max(|K(0)|, max|K|/4)), dense over
   [T0, 1e4], dense windows up to T = 1e5 and log-spaced up to T = 1e14;

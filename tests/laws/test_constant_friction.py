@@ -1,4 +1,4 @@
-"""The constant-friction law, added as docs/developer.md's recipe "Add a law" says: one
+"""The constant-friction law, added as docs/developer/developer.md's recipe "Add a law" says: one
 file (cracklab/laws/constant_friction.py) and these tests."""
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""Rate-and-state friction against exact results (docs/equations.md, "Rate-and-state friction").
+"""Rate-and-state friction against exact results (docs/reference/equations.md, "Rate-and-state friction").
 
 A uniform fault under a uniform load moves only its q = 0 mode, whose elastodynamic
 functional is nil: tau = tau0 - eta V exactly (eta = mu / (2 c_s)), and V(t), psi(t)

@@ -271,7 +271,7 @@ def test_a_saved_random_toughness_scene_is_tens_of_lines_and_one_sidecar(tmp_pat
     assert path == tmp_path / "scene.toml"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.fields.nc", "scene.toml"]
     text = path.read_text()
-    assert len(text.splitlines()) < 50, text            # docs/scenes.md: fewer than 50 lines
+    assert len(text.splitlines()) < 50, text            # docs/reference/scenes.md: fewer than 50 lines
     assert 'tau_c = { file = "scene.fields.nc", var = "law_tau_c" }' in text
     assert (tmp_path / "scene.fields.nc").stat().st_size < 100_000     # and a sidecar under 100 KB
     back = Scene.from_toml(path)

@@ -8,7 +8,7 @@ TypeError, ...). The mutations replace, scale, delete and add values anywhere in
 file (nested list elements and table entries included) with extreme floats and integers,
 booleans, strings, dates, nested lists and tables, and corrupt the bytes of the file.
 Deterministic in CI (derandomize, no example database); CRACKLAB_FUZZ_EXAMPLES=5000
-CRACKLAB_HYPOTHESIS_RANDOM=1 for a longer random search. See docs/reliability.md,
+CRACKLAB_HYPOTHESIS_RANDOM=1 for a longer random search. See docs/guide/reliability.md,
 "Input validation never crashes"."""
 import copy
 import datetime

@@ -3,7 +3,7 @@
 Every invalid input ends with exactly one cracklab InputError (no other exception, no
 chained traceback) that names the offending field and the accepted range, before any
 work starts: no store is created, and an existing store is left byte for byte as it was.
-The number of inputs tried is reported in docs/reliability.md ("Bad input")."""
+The number of inputs tried is reported in docs/guide/reliability.md ("Bad input")."""
 import copy
 import dataclasses
 import hashlib
@@ -63,7 +63,7 @@ BASES = _bases()
 DATA = {name: tomllib.loads(scene_to_toml(s)) for name, s in BASES.items()}
 SECTIONS = ("material", "grid", "law", "loading", "record", "numerics")
 TOP = ("t_end", "beta", "name", "units")
-TRIED = {}          # property -> number of inputs tried (reported in docs/reliability.md)
+TRIED = {}          # property -> number of inputs tried (reported in docs/guide/reliability.md)
 
 
 def count(name):

@@ -319,18 +319,18 @@ def test_cli_runs_a_written_scene(tmp_path):
 
 
 def test_docs_scenes_examples_run(tmp_path, monkeypatch):
-    """The python blocks of docs/scenes.md run, in order, in one namespace."""
+    """The python blocks of docs/reference/scenes.md run, in order, in one namespace."""
     import re
     from pathlib import Path
 
-    text = (Path(__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
+    text = (Path(__file__).resolve().parents[2] / "docs" / "reference" / "scenes.md").read_text()
     code = [body for tag, body in re.findall(r"^```([\w-]*)[ \t]*\n(.*?)^```[ \t]*$", text, re.S | re.M)
             if tag == "python" and "=" in body and "(*," not in body]
     assert len(code) >= 2
     monkeypatch.chdir(tmp_path)
     namespace = {"__name__": "__docs__"}
     for body in code:
-        exec(compile(body, "docs/scenes.md", "exec"), namespace)
+        exec(compile(body, "docs/reference/scenes.md", "exec"), namespace)
 
 
 def test_engine_threads_reach_the_engine_and_round_trip():

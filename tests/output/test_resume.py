@@ -1,4 +1,4 @@
-"""Checkpoint / resume of long runs (docs/reliability.md, "Long runs"): a run killed with
+"""Checkpoint / resume of long runs (docs/guide/reliability.md, "Long runs"): a run killed with
 SIGKILL, also in the middle of a checkpoint write, resumes to the same results, bit for bit."""
 import importlib
 import json

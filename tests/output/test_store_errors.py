@@ -1,4 +1,4 @@
-"""Store errors of single runs (docs/reliability.md): a path that is not a cracklab store,
+"""Store errors of single runs (docs/guide/reliability.md): a path that is not a cracklab store,
 a store of another format or version, a read-only location and a full disk each end
 with one clear StoreError (one line from the CLI), and a full disk can be resumed from."""
 import errno

@@ -1,4 +1,4 @@
-"""Stored data that cannot be silently wrong (docs/reliability.md, "Stored data:
+"""Stored data that cannot be silently wrong (docs/guide/reliability.md, "Stored data:
 checksums, verification and the order of writes"): every chunk carries a crc32c
 checksum; ``cracklab verify`` and every rerun or resume find a deleted chunk, a changed
 byte or damaged metadata and name the file; a damaged store or member is recomputed,

@@ -23,7 +23,7 @@ def run():
 
 # Half-widths in tau of the windows left out around the P, S and R arrivals. Around R
 # the point load's flat spectrum rings (Gibbs) over about 2.5 cells at 32 cells from
-# the load, so the R window is wider than the 0.03 of P and S (docs/verification.md).
+# the load, so the R window is wider than the 0.03 of P and S (docs/studies/verification.md).
 WINDOWS = (0.03, 0.03, 0.08)
 
 

@@ -36,7 +36,7 @@ def test_domain_and_defaults(paper):
     m = paper.material
     assert (m.mu, m.cs, m.nu) == (1.0, 1.0, 0.25)
     # delta_c chosen so that the static cohesive zone is 0.1 Z, 25.6 cells at 512 x 256
-    # (the running crack's zone is then ~14 cells, docs/scenes.md)
+    # (the running crack's zone is then ~14 cells, docs/reference/scenes.md)
     R0 = scenes.cohesive_zone_size(m, 1.0, paper.law.delta_c)
     assert R0 == pytest.approx(0.1)
     assert R0 / g.dx1 == pytest.approx(25.6)

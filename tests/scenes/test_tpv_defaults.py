@@ -1,5 +1,5 @@
 """The time stepping of scenes.tpv3 and scenes.tpv5 without ``numerics``: the second-order
-product scheme ("product2", docs/stability.md "The order of a rupture front") at beta =
+product scheme ("product2", docs/reference/stability.md "The order of a rupture front") at beta =
 0.125, i.e. dt = 0.125 dx / c_s, inside the scheme's stable range; an explicit
 ``numerics`` or ``beta`` is taken as given."""
 import pytest

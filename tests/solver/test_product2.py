@@ -1,5 +1,5 @@
 """The product scheme with the law at the step's mean velocity (formulation "product2",
-solver/schemes/product2.py; docs/stability.md, "The order of a rupture front"): its
+solver/schemes/product2.py; docs/reference/stability.md, "The order of a rupture front"): its
 linear part is the product scheme's (the single-mode recurrence, to the last bit on a
 traction-free plane), and on a slip-weakening front its rupture time converges at second
 order in dt where the product scheme's converges at first."""

@@ -1,7 +1,7 @@
 """The product scheme on the full grid (velocity formulation, Z integrated exactly
 against the piecewise-linear velocity history, one predictor-corrector pass):
 identical to the single-mode recurrence of cracklab.modal, and stable in mode II
-where the paper's explicit scheme grows (docs/stability.md)."""
+where the paper's explicit scheme grows (docs/reference/stability.md)."""
 import numpy as np
 import pytest
 
@@ -15,7 +15,7 @@ SCHEME = dict(formulation="velocity", convolution="product", integration="predic
 
 
 # the direct engine reproduces the recurrence to round-off; the exponential engine to its
-# fitted representation of Z (about 1e-5 of Z(0), docs/fast_engine.md)
+# fitted representation of Z (about 1e-5 of Z(0), docs/reference/fast_engine.md)
 ENGINES = [("direct", 1e-10), ("exponential", 2e-5)]
 
 
@@ -74,7 +74,7 @@ def test_displacement_scheme_refuses_the_same_beta():
 
 def test_tpv3_uses_a_stable_shear_scheme():
     """tpv3 steps with the product scheme's second-order variant (product2, whose limits
-    are the product scheme's) at beta = 0.125, inside its stable range (docs/tpv3.md)."""
+    are the product scheme's) at beta = 0.125, inside its stable range (docs/studies/tpv3.md)."""
     from cracklab.solver.stability import beta_max
 
     sc = tpv3(dx=1000.0, t_end=0.5)

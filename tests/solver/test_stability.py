@@ -1,4 +1,4 @@
-"""Long-time stability of the single-mode schemes (docs/stability.md, studies/stability_map.py).
+"""Long-time stability of the single-mode schemes (docs/reference/stability.md, studies/stability_map.py).
 
 The default scheme (displacement, trapezoid pre-integration (46), explicit (37)) lets the
 mode II Rayleigh oscillation grow; the product-integration predictor-corrector schemes

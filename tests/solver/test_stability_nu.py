@@ -1,5 +1,5 @@
-"""Stability limits for every Poisson ratio (cracklab.stability, docs/stability.md) and the
-growth detectors of the Stepper (docs/reliability.md, "Numerical faults").
+"""Stability limits for every Poisson ratio (cracklab.stability, docs/reference/stability.md) and the
+growth detectors of the Stepper (docs/guide/reliability.md, "Numerical faults").
 
 Three checks of the tabulated limits, each against a computation that does not use them:
 the single-mode response (cracklab.modal_response) grows just above the measured limit and

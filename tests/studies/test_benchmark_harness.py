@@ -1,5 +1,5 @@
 """Where the benchmark studies find their reference (studies/benchmarks/harness.py,
-docs/developer.md "Add a benchmark study"): the command line's folder first, then
+docs/developer/developer.md "Add a benchmark study"): the command line's folder first, then
 $CRACKLAB_REFERENCE/<name>, then shared/reference/<name> beside the repository."""
 from __future__ import annotations
 

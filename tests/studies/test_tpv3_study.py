@@ -1,4 +1,4 @@
-"""The TPV3 study's comparison machinery (studies/tpv3/compare.py, docs/tpv3.md) on
+"""The TPV3 study's comparison machinery (studies/tpv3/compare.py, docs/studies/tpv3.md) on
 synthetic series with known answers, the builder's nucleation patch, and a coarse run."""
 from __future__ import annotations
 
@@ -107,9 +107,9 @@ def test_tpv3_nucleation_patch_is_cell_averaged():
 def test_coarse_tpv3_rupture_time():
     """600 m, 4 s (a few seconds): the in-plane station ruptures within 0.3 s of MDSBI's
     2.99 s. Loose: at 600 m the static cohesive zone (about 0.6-0.8 km) spans about one
-    cell and the coarse front is late (3.17 s at 600 m, 3.14 s at 400 m; docs/tpv3.md).
+    cell and the coarse front is late (3.17 s at 600 m, 3.14 s at 400 m; docs/studies/tpv3.md).
     The displacement scheme (beta = 0.049): at this resolution the product scheme's
-    beta = 0.25 delays the front by another 0.35 s or more (docs/tpv3.md, "Numerics")."""
+    beta = 0.25 delays the front by another 0.35 s or more (docs/studies/tpv3.md, "Numerics")."""
     from studies.tpv3 import run
     from cracklab.model.record import Record
     from cracklab.scenes import tpv3

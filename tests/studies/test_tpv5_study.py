@@ -1,4 +1,4 @@
-"""The TPV5 study's pure parts (studies/tpv5/compare.py and run.py, docs/tpv5.md) on
+"""The TPV5 study's pure parts (studies/tpv5/compare.py and run.py, docs/studies/tpv5.md) on
 synthetic data with known answers: the acceptance on the MDSBI records and on perturbed
 copies of them, the lag fit over beta, the cell check, the free-surface station's check,
 and the study's path from a stations Dataset to its verdict, page and exit status."""

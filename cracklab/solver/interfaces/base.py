@@ -1,7 +1,7 @@
 """The interface protocol: the plane x2 = 0 between a top (x2 > 0) and a bottom (x2 < 0)
 half space, and the elastodynamic part of step (v), tau = tau0 + f - eta V (Eqs. 3-4).
 
-An interface type is one file here (docs/developer.md, "Add a half-space type"), a class
+An interface type is one file here (docs/developer/developer.md, "Add a half-space type"), a class
 registered with :func:`register`. The class says, before any is built:
 
 * ``accepts(top, bottom)``: whether it is the interface of that pair of materials (exactly

@@ -5,7 +5,7 @@ With tau = tau0 - eta+ v+ + f+ (top) = tau0 + eta- v- + f- (bottom) and V = v+ -
 
     tau = tau0 + f - eta V,   f = (eta- f+ + eta+ f-)/(eta+ + eta-),   eta = eta+ eta-/(eta+ + eta-),
 
-per component (docs/developer.md, "Add a half-space type"), and once V is known the faces
+per component (docs/developer/developer.md, "Add a half-space type"), and once V is known the faces
 move with
 
     v+ = [(f+ - f-) + eta- V]/(eta+ + eta-),   v- = v+ - V.
@@ -71,7 +71,7 @@ class Bimaterial(Interface):
 
     #: of two different materials, the stable limit is this fraction of the smaller side's
     #: (measured on the traction-free mixed-mode faces: stable at 0.9, growing from 0.97;
-    #: docs/performance.md, "Bimaterial interface")
+    #: docs/studies/performance.md, "Bimaterial interface")
     margin = 0.9
     energy_refusal = ("energy_budget covers an interface between two half spaces of one material; "
                       "this scene has two (the bimaterial budget is not implemented)")

@@ -1,6 +1,6 @@
 """The time-scheme protocol: a scheme is a class holding its coefficients (its rule, the
 kernel its history convolves, its modal recurrence, its stability limits, what it needs of
-the run) and the two parts of a step that differ between schemes (docs/developer.md, "Add
+the run) and the two parts of a step that differ between schemes (docs/developer/developer.md, "Add
 a time scheme"). A scheme class registers with the :func:`register` decorator; every module
 of this package is imported (``schemes.SCHEMES``), so that a new scheme is one file:
 
@@ -99,7 +99,7 @@ class Scheme:
     def front_order(self) -> int:
         """The order in dt of a slip-weakening front's rupture time: 2 where the law is
         updated at the step's mean velocity (its slip path by the trapezoid rule), 1 where it
-        is updated with v_{n-1} (the rectangle rule; docs/stability.md, "The order of a
+        is updated with v_{n-1} (the rectangle rule; docs/reference/stability.md, "The order of a
         rupture front")."""
         return 2 if self.mean_velocity else 1
 

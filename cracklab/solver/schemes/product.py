@@ -1,6 +1,6 @@
 """The product scheme: the velocity formulation with Z integrated exactly against the
 piecewise-linear velocity history, the trapezoid update (50) and one predictor-corrector
-pass (docs/stability.md): F_n = -(mu q / 2) Z(0) D_n + (mu / 2 c_s) gamma [sum_{m=0}^n W_m
+pass (docs/reference/stability.md): F_n = -(mu q / 2) Z(0) D_n + (mu / 2 c_s) gamma [sum_{m=0}^n W_m
 V_{n-m} + E_0(n) V_0]; the V_n terms form K V_n with K = (mu gamma / 2 c_s)(W_0 - Z(0)/2),
 applied to a predicted, then a corrected velocity. Two FFT pairs per step."""
 from __future__ import annotations

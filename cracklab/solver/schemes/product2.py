@@ -1,4 +1,4 @@
-"""The product scheme with the law at the step's mean velocity (docs/stability.md, "The
+"""The product scheme with the law at the step's mean velocity (docs/reference/stability.md, "The
 order of a rupture front"): the same response as ``product`` (Z integrated exactly against
 the piecewise-linear velocity, the trapezoid update (50), one predictor-corrector pass),
 but the law's update of step n, which the product scheme makes with v_{n-1} (a slip path
