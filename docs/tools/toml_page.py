@@ -91,6 +91,18 @@ REFERENCE_RULES = """\
 
 - A relative path is taken from the directory of the scene file (for TOML text given to
   `Scene.from_toml`, from its `base` argument, by default the current directory).
+- A file is read only from the scene file's folder or a folder below it, after symbolic
+  links are followed (an absolute path is fine if it lies there). A scene received from
+  someone else thus reads only what came with it: it cannot copy other data of yours into
+  its output (the store keeps every input field), which you may then share. To read from
+  another folder, allow it: `cracklab run --allow-files DIR` (repeatable),
+  `Scene.from_toml(path, allow=[DIR])`, or the environment variable
+  `CRACKLAB_ALLOW_FILES` (folders separated by `:`).
+- Only a regular file is read (a Zarr field: a directory of them): a FIFO, a device or a
+  socket is refused at once rather than read (a FIFO would block the run for ever).
+- Where each field came from is kept: the input variable of the output (e.g.
+  `input_law_tau_c`) carries a `source` attribute with the reference as the scene wrote it
+  and the SHA-256 of the bytes read.
 - The array has the grid's shape: (n1, n3), or (n1, n3 + 1) with `grid.free_surface`;
   in the plane problem (n3 = 1) an array of shape (n1,) is taken as (n1, 1).
 - A netCDF or Zarr variable lies on the dims `x1` and `x3` (in either order), and each
