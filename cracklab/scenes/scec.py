@@ -12,6 +12,7 @@ from ..model.loading import Loading
 from ..model.material import Material
 from ..model.record import Record
 from ..model.scene import Numerics, Scene
+from ..solver.interfaces import interface_type
 from ..solver.stability import beta_max
 from .common import _require
 
@@ -206,7 +207,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
         raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
     if beta is None:  # at most 0.125, as tpv3 (docs/tpv3.md, "Rupture time"), for the side that sets dt
         fast = max(pair, key=lambda m: m.cs)
-        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps, interface_type(pair)), comps, nu=fast.nu))
     return Scene(materials=tuple(pair), grid=grid, law=law,
                  loading=Loading(tau0_1=tau0, tau0_2=-120.0e6), t_end=t_end, beta=beta,
                  record=record or Record(fields=(), stations=stations), numerics=numerics,
