@@ -89,9 +89,10 @@ def spacing_grid(builder, dx, domain, *, free_surface=False, unit="m", holds=Non
     of "dx" naming the nearest spacings that divide the domain; a dx that does not divide
     the domain exactly rounds it to n dx, with a BuilderWarning naming the requested and the
     actual domain (the periodic images' distance; the builders place the fault, its loads
-    and stations from the hypocentre node, so the problem itself is unchanged). ``holds(L1, L3, d)``:
-    whether the domain holds the builder's fault at spacing d (else an InputError of
-    "domain" saying what it ``needs``; the spacings offered hold it too)."""
+    and stations from the hypocentre node, so the problem itself is unchanged).
+    ``holds(L1, L3, d)``: whether the domain holds the builder's fault at spacing d; when it
+    does not, an InputError of "dx" if a finer spacing would (dx too coarse), else of
+    "domain", saying what it ``needs``. The spacings offered hold it too."""
     try:
         L1, L3 = (float(x) for x in domain)
     except (TypeError, ValueError, OverflowError):
@@ -115,7 +116,8 @@ def spacing_grid(builder, dx, domain, *, free_surface=False, unit="m", holds=Non
         raise InputError("dx", f"must divide the domain {L1:g} x {L3:g} {unit} of {builder} into an even fast FFT "
                                f"size of nodes along each axis (2^a 3^b 5^c 7^d, 2 to {MAX_NODES_PER_AXIS}, at most "
                                f"2^26 nodes in all), got dx = {dx:g}: {n1} x {n3} nodes; nearest accepted: "
-                               f"{_spacings_text(accepted_spacings(L1, L3, dx, holds))} (or a domain that dx divides so)")
+                               f"{_spacings_text(accepted_spacings(L1, L3, dx, holds))} "
+                               f"(or a domain that dx divides so)")
     if not (_exact(n1, dx, L1) and _exact(n3, dx, L3)):
         exact = accepted_spacings(L1, L3, dx, holds)
         _warn(
