@@ -25,12 +25,16 @@ MIRROR_ROUNDOFF = 1e-12     # |tau0_3| on the lines of a free surface's mirror, 
 DEFAULT_BETA = 0.5          # a Scene without beta takes min(DEFAULT_BETA, its stable limit)
 
 
-def resolve_formulation(formulation: str, components) -> str:
+def resolve_formulation(formulation: str, components, interface=None) -> str:
     """"auto": the paper's displacement scheme when only mode I is active, the product
-    scheme (stable in mode II, docs/reference/stability.md) whenever a shear component is."""
+    scheme (stable in mode II, docs/reference/stability.md) whenever a shear component is; of those,
+    with ``interface`` (an interface type, solver/interfaces), a scheme it accepts
+    (``auto_scheme``: the product scheme on a pair of different materials). Any other
+    value is returned as it is."""
     if formulation != "auto":
         return formulation
-    return "product" if any(c in (1, 3) for c in components) else "displacement"
+    preferred = "product" if any(c in (1, 3) for c in components) else "displacement"
+    return preferred if interface is None else interface.auto_scheme(preferred)
 
 
 def _check_threads(name, value, alternative=""):
@@ -48,7 +52,8 @@ class Numerics:
     predictor-corrector pass: does not grow in mode II, docs/reference/stability.md) or "product2" (the
     product scheme with the law updated at the step's mean velocity: a slip-weakening front
     converges at second order in dt, docs/reference/stability.md "The order of a rupture front"); "auto" (default):
-    product when a shear component is active, displacement otherwise. History ``engine``
+    product when a shear component is active, displacement otherwise, or the scheme the
+    interface runs where it does not run that one (product between two different materials). History ``engine``
     "exponential" (flat cost per step), "direct" (the reference), or "auto" (default:
     exponential, direct when a ``window`` is set); ``window`` truncates the history at
     T = q c_s t (None: full history; a window longer than the run truncates nothing);
@@ -93,9 +98,10 @@ class Numerics:
         """Threads of the history engine's loop: ``engine_threads``, or ``fft_threads`` when None."""
         return int(self.fft_threads if self.engine_threads is None else self.engine_threads)
 
-    def scheme(self, components) -> tuple[str, str]:
-        """(formulation, convolution rule) used for a scene with these active components."""
-        formulation = resolve_formulation(self.formulation, components)
+    def scheme(self, components, interface=None) -> tuple[str, str]:
+        """(formulation, convolution rule) used for a scene with these active components
+        (and, with ``interface``, this interface type: see ``resolve_formulation``)."""
+        formulation = resolve_formulation(self.formulation, components, interface)
         return formulation, FORMULATIONS[formulation]
 
 
@@ -290,7 +296,7 @@ class Scene:
     @property
     def formulation(self) -> str:
         """The time-stepping scheme actually used (numerics.formulation with "auto" resolved)."""
-        return resolve_formulation(self.numerics.formulation, self.components)
+        return resolve_formulation(self.numerics.formulation, self.components, self.interface_type)
 
     @property
     def beta_max(self) -> float:
@@ -299,7 +305,8 @@ class Scene:
         limits (the coupled faces grew at 0.97-1.0 of it: docs/studies/performance.md,
         "Bimaterial interface")."""
         comps = self.components
-        limit = min(beta_max(self.grid, *self.numerics.scheme(comps), comps, nu=m.nu) for m in set(self.materials))
+        scheme = self.numerics.scheme(comps, self.interface_type)
+        limit = min(beta_max(self.grid, *scheme, comps, nu=m.nu) for m in set(self.materials))
         return limit * self.interface_type.margin
 
     @property

@@ -8,7 +8,7 @@ Modules: ``paper`` (the paper's problems), ``scec`` (the SCEC benchmarks), ``fro
 (the crack-growth problems), ``registry`` (``BUILDERS``, the builders a study file may
 name, and the builders registered with ``cracklab.register_builder``), ``common``.
 """
-from .common import UNIT
+from .common import UNIT, BuilderWarning
 from .fronts import (COVARIANCES, DISTRIBUTIONS, asperity_mask, asperity_row, cohesive_zone_size, random_field,
                      random_toughness)
 from .paper import ellipse_mask, elliptical_crack, kostrov, lamb, periodic_cracks
@@ -17,7 +17,7 @@ from .scec import (TPV3_STATIONS, TPV5_PATCHES, TPV5_REFERENCE_STATIONS, TPV5_ST
                    TPV6_REFERENCE_STATIONS, TPV6_STATIONS, TPV101_STATIONS, TPV_HYPO_DEPTH, taper,
                    tpv3, tpv3_station_name, tpv5, tpv6, tpv101, tpv102, tpv103, tpv104)
 
-__all__ = ["BUILDERS", "UNIT",
+__all__ = ["BUILDERS", "UNIT", "BuilderWarning",
            "lamb", "ellipse_mask", "elliptical_crack", "periodic_cracks", "kostrov",
            "tpv3", "tpv5", "tpv6", "tpv101", "tpv102", "tpv103", "tpv104", "tpv3_station_name", "taper",
            "TPV3_STATIONS", "TPV5_REFERENCE_STATIONS", "TPV5_STATIONS", "TPV5_PATCHES",

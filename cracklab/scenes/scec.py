@@ -1,19 +1,29 @@
 """The SCEC benchmarks: TPV3, TPV5 (a free surface by mirror symmetry), TPV6 (a bimaterial
 fault under a free surface) and TPV101-TPV104 (rate-and-state friction; TPV102 and TPV104
-below a free surface), with their stations named as SCEC names them."""
+below a free surface), with their stations named as SCEC names them.
+
+Every builder here takes the spacing ``dx`` and the ``domain`` (L1, L3) in m and puts
+round(L / dx) nodes of dx along each axis (scenes/common.py, ``spacing_grid``): a dx that
+gives no even fast FFT size of nodes, or too coarse a grid for the fault, is refused as an
+InputError of "dx" naming the nearest spacings that divide the domain; a dx that does not
+divide the domain rounds it to n dx with a ``BuilderWarning`` naming the requested and the
+actual domain (the fault, its loads and stations are placed from the hypocentre node, so
+the problem is the same). A default station whose node cannot slip at the chosen grid
+(outside the fault or on its bonded edge) is left out of the recording with a
+``BuilderWarning`` naming it, its node and the grid (``check_stations``)."""
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import InputError, check_positive
 from ..laws import RateState, SlipWeakening
-from ..model.grid import Grid
 from ..model.loading import Loading
 from ..model.material import Material
 from ..model.record import Record
 from ..model.scene import Numerics, Scene
+from ..solver.interfaces import interface_type
 from ..solver.stability import beta_max
-from .common import _require
+from .common import check_stations, spacing_grid
 
 
 def tpv3_station_name(strike: int, dip: int) -> str:
@@ -23,12 +33,15 @@ def tpv3_station_name(strike: int, dip: int) -> str:
     return f"faultst{fmt(strike)}dp{fmt(dip)}"
 
 
-# (strike, dip) offsets from the hypocentre in units of 100 m. faultst075dp000 and
-# faultst000dp-030 (3.0 km along dip) are the MDSBI reference's two records
-# (the MDSBI results of the SCEC/USGS benchmark); the problem is symmetric along dip, so
-# faultst000dp030 carries the same series as faultst000dp-030.
+#: (strike, dip) offsets from the hypocentre in units of 100 m, dip along x3, every one
+#: inside the 30 km x 15 km fault (|strike| < 15 km, |dip| < 7.5 km): along strike at the
+#: hypocentre's depth; along dip through it, up to 6 km (Day et al. 2005's anti-plane point;
+#: the fault's edge, 7.5 km along dip, is bonded and would record zero); off both axes.
+#: faultst075dp000 and faultst000dp-030 (3.0 km along dip) are the MDSBI reference's two
+#: records (the MDSBI results of the SCEC/USGS benchmark); the problem is symmetric along dip, so
+#: faultst000dp030 carries the same series as faultst000dp-030.
 TPV3_STATIONS = [(s, 0) for s in (-120, -75, -45, 0, 45, 75, 120)] + \
-    [(0, d) for d in (-75, -45, -30, 30, 45, 75)] + [(45, -45), (75, -75), (-45, 45)]
+    [(0, d) for d in (-60, -45, -30, 30, 45, 60)] + [(45, -45), (75, -60), (-45, 45)]
 
 
 def _tpv3_cell_fraction(x, dx, half_width):
@@ -41,9 +54,12 @@ def _tpv3_cell_fraction(x, dx, half_width):
 def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
     """SCEC TPV3 (the SCEC/USGS benchmark; docs/studies/tpv3.md): 30 km x 15 km fault
     centred in a periodic domain, slip-weakening friction, bonded outside the fault;
-    SI units. Records the SCEC on-fault stations, among them the reference's
-    faultst075dp000 (7.5 km along strike) and faultst000dp-030 (3.0 km along dip), and
-    the rupture time (slip rate above 1 mm/s).
+    SI units. Records the on-fault stations ``TPV3_STATIONS`` (named by their strike and
+    dip offsets from the hypocentre in units of 100 m, all inside the fault), among them
+    the reference's faultst075dp000 (7.5 km along strike) and faultst000dp-030 (3.0 km
+    along dip), and the rupture time (slip rate above 1 mm/s). ``dx`` and ``domain``: see
+    the module docstring (the domain must hold the fault and two cells of bonded plane
+    around it).
 
     The square nucleation patch and the fault edge are put on the grid as MDSBI does
     with its 'box' asperities (the reference code): each node stands for the cell
@@ -57,9 +73,10 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     scheme with the law's slip path advanced by the trapezoid rule, S_n = S_{n-1} +
     dt |v_{n-1} + v*_n|/2 (rupture times second order in dt; docs/reference/stability.md, "The order
     of a rupture front"), at beta = min(0.125, 0.95 beta_max). See docs/studies/tpv3.md."""
-    L1, L3 = domain
-    n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx)
+    grid = spacing_grid("tpv3", dx, domain, holds=lambda L1, L3, d: _holds_fault(L1, L3, d, 2.0),
+                        needs="must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+                              "L3 >= 15 km + 2 dx)")
+    n1, n3 = grid.n1, grid.n3
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
     xc, zc = grid.x1[n1 // 2], grid.x3[n3 // 2]
     f1 = _tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 1500.0)
@@ -69,13 +86,15 @@ def tpv3(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
                      _tpv3_cell_fraction(grid.x3 - zc, grid.dx3, 7500.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
-    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}
+    if record is None:
+        record = Record(fields=(), stations=check_stations("tpv3", {
+            tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * d) for s, d in TPV3_STATIONS}, grid, fault))
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
     if beta is None:  # at most 0.125: the rupture times within 0.05 s at 100 m (docs/studies/tpv3.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end,
                  beta=beta,
-                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 record=record, numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv3")
 
 
@@ -93,19 +112,19 @@ TPV5_STATIONS = TPV5_REFERENCE_STATIONS + [(-75, 0), (75, 0), (-120, 0), (120, 0
 TPV5_PATCHES = ((0.0, 81.6e6), (-7500.0, 78.0e6), (7500.0, 62.0e6))
 
 
-def _surface_fault_grid(dx, domain):
+def _holds_fault(L1, L3, dx, cells3):
+    """Whether the domain L1 x L3 holds the 30 km x 15 km fault with bonded plane around
+    it on a grid of spacing dx: two cells along strike, ``cells3`` along x3 (2 for the whole
+    space, 1 below a free surface)."""
+    return round(L1 / dx) * dx >= 30000.0 + 2 * dx and round(L3 / dx) * dx >= 15000.0 + cells3 * dx
+
+
+def _surface_fault_grid(builder, dx, domain):
     """The half plane below a free surface of ``tpv5`` and ``tpv6``: ``domain`` = (L1, L3) in
     m, holding the 30 km x 15 km fault with bonded plane around it."""
-    dx = check_positive("dx", dx)
-    try:
-        L1, L3 = (float(x) for x in domain)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError("domain", f"must be (L1, L3) in m, got {domain!r}") from None
-    n1, n3 = int(round(check_positive("domain", L1) / dx)), int(round(check_positive("domain", L3) / dx))
-    _require("domain", n1 * dx >= 30000.0 + 2 * dx and n3 * dx >= 15000.0 + dx,
-             f"must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
-             f"L3 >= 15 km + dx), got {domain!r}")
-    return Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=True)
+    return spacing_grid(builder, dx, domain, free_surface=True, holds=lambda L1, L3, d: _holds_fault(L1, L3, d, 1.0),
+                        needs="must hold the 30 km x 15 km fault with bonded plane around it (L1 >= 30 km + 2 dx, "
+                              "L3 >= 15 km + dx)")
 
 
 def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=(48000.0, 24000.0)):
@@ -131,7 +150,7 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     order in dt) at beta = min(0.125, 0.95 beta_max); the first-order product scheme needed
     beta = 0.09 to keep every station's rupture time within 0.05 s of the reference at
     100 m. See docs/studies/tpv5.md."""
-    grid = _surface_fault_grid(dx, domain)
+    grid = _surface_fault_grid("tpv5", dx, domain)
     n1 = grid.n1
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)
     xc = grid.x1[n1 // 2]
@@ -144,12 +163,14 @@ def tpv5(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
                      _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, sigma_n=120.0e6, bonded=~fault)
-    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}
+    if record is None:
+        record = Record(fields=(), stations=check_stations("tpv5", {
+            tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV5_STATIONS}, grid, fault))
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
     if beta is None:  # at most 0.125, as tpv3 (docs/studies/tpv5.md, "Rupture time")
         beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_1=tau0), t_end=t_end, beta=beta,
-                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 record=record, numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv5")
 
 
@@ -188,7 +209,7 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     near side's c_s (it sets dt). Time stepping: the scheme ``product2`` (rupture fronts at
     second order in dt, docs/reference/stability.md); ``numerics`` replaces it. ``materials`` = (top,
     bottom) replaces the pair (None: (``TPV6_FAR``, ``TPV6_NEAR``)). See docs/studies/tpv6.md."""
-    grid = _surface_fault_grid(dx, domain)
+    grid = _surface_fault_grid("tpv6", dx, domain)
     n1 = grid.n1
     xc, depth = grid.x1[n1 // 2], grid.x3
     patch = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 1500.0),
@@ -198,7 +219,9 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
     fault = np.outer(_tpv3_cell_fraction(grid.x1 - xc, grid.dx1, 15000.0),
                      _tpv3_cell_fraction(depth, grid.dx3, 15000.0)) >= 1.0 - 1e-9
     law = SlipWeakening(mu_s=0.677, mu_d=0.525, D_c=0.40, bonded=~fault)
-    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV6_STATIONS}
+    if record is None:
+        record = Record(fields=(), stations=check_stations("tpv6", {
+            tpv3_station_name(s, d): (xc + 100.0 * s, 100.0 * d) for s, d in TPV6_STATIONS}, grid, fault))
     numerics = numerics or Numerics(formulation="product2", rupture_threshold=1e-3)
     comps = (1, 2, 3)
     pair = (TPV6_FAR, TPV6_NEAR) if materials is None else materials
@@ -206,10 +229,10 @@ def tpv6(*, dx=100.0, t_end=12.0, beta=None, record=None, numerics=None, domain=
         raise InputError("materials", f"must be (top, bottom), two cracklab.Material, got {materials!r}")
     if beta is None:  # at most 0.125, as tpv3 (docs/studies/tpv3.md, "Rupture time"), for the side that sets dt
         fast = max(pair, key=lambda m: m.cs)
-        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps), comps, nu=fast.nu))
+        beta = min(0.125, 0.95 * beta_max(grid, *numerics.scheme(comps, interface_type(pair)), comps, nu=fast.nu))
     return Scene(materials=tuple(pair), grid=grid, law=law,
                  loading=Loading(tau0_1=tau0, tau0_2=-120.0e6), t_end=t_end, beta=beta,
-                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 record=record, numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name="tpv6")
 
 
@@ -246,16 +269,14 @@ def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau
     symmetry), the hypocentre at the centre along strike and 7.5 km deep, so the fault's
     top is the surface. ``law`` maps the velocity-weakening box
     B(x; 15 km, 3 km) B(z; 7.5 km, 3 km) (x, z from the hypocentre) to the law."""
-    L1, L3 = domain
-    dx = check_positive("dx", dx)
-    n1, n3 = int(round(L1 / dx)), int(round(L3 / dx))
-    grid = Grid(n1=n1, n3=n3, L1=n1 * dx, L3=n3 * dx, free_surface=free_surface)
+    deep = 2 * TPV_HYPO_DEPTH + 3000.0      # the half space reaches below the fault's transition
+    grid = spacing_grid(name, dx, domain, free_surface=free_surface,
+                        holds=(lambda L1, L3, d: round(L3 / d) * d >= deep) if free_surface else None,
+                        needs=f"must reach below the fault and its 3 km transition (depth L3 >= {deep:g} m)")
+    n1, n3 = grid.n1, grid.n3
     mat = Material(mu=2670.0 * 3464.0**2, cs=3464.0, nu=0.25)       # c_p = sqrt(3) c_s = 6000 m/s
     xc = grid.x1[n1 // 2]
     if free_surface:
-        if grid.L3 < 2 * TPV_HYPO_DEPTH + 3000.0:
-            raise InputError("domain", f"the depth L3 must reach below the fault and its 3 km transition "
-                                       f"(>= {2 * TPV_HYPO_DEPTH + 3000.0:g} m), got {grid.L3:g}")
         zc = TPV_HYPO_DEPTH              # x3 is the depth; the hypocentre need not lie on a node
     else:
         zc = grid.x3[n3 // 2]
@@ -263,12 +284,15 @@ def _tpv_rate_state(name, *, dx, t_end, beta, record, numerics, domain, law, tau
     loading = Loading(tau0_1=tau0, nucleation_dtau_1=dtau0, nucleation_radius=3000.0, nucleation_time=1.0,
                       nucleation_x1=float(xc), nucleation_x3=float(zc))
     # dp: depth below the top of the fault, 7.5 km above the hypocentre (x3 grows with depth)
-    stations = {tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * (d - 75)) for s, d in TPV101_STATIONS}
+    if record is None:   # the velocity-weakening fault, B B = 1
+        record = Record(fields=(), stations=check_stations(name, {
+            tpv3_station_name(s, d): (xc + 100.0 * s, zc + 100.0 * (d - 75)) for s, d in TPV101_STATIONS},
+            grid, box >= 1.0))
     numerics = numerics or Numerics(formulation="auto", rupture_threshold=1e-3)
     if beta is None:
         beta = min(0.25, 0.95 * beta_max(grid, *numerics.scheme((1, 3)), (1, 3), nu=mat.nu))
     return Scene(material=mat, grid=grid, law=law(box), loading=loading, t_end=t_end, beta=beta,
-                 record=record or Record(fields=(), stations=stations), numerics=numerics,
+                 record=record, numerics=numerics,
                  units={"length": "m", "time": "s", "stress": "Pa"}, name=name)
 
 

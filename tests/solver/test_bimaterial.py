@@ -155,6 +155,10 @@ def test_scene_takes_two_materials():
     assert isinstance(for_scene(sc.replace(material=M)), Identical)
     with pytest.raises(InputError, match="numerics.formulation"):
         sc.replace(numerics=Numerics(formulation="velocity"))
+    # the builder's default numerics ("auto", the displacement scheme for one material in
+    # mode I) take the product scheme on the pair
+    auto = cracklab.scenes.lamb(n=8, t_end=0.05).replace(materials=(M, bottom))
+    assert auto.numerics.formulation == "auto" and auto.formulation == "product"
 
 
 def test_free_surface_bimaterial_run_equals_the_doubled_whole_space_run():

@@ -3,10 +3,10 @@ and a scene's materials (one for both sides, or (top, bottom))."""
 import numpy as np
 import pytest
 
-from cracklab import Grid, InputError, Loading, Material, Record, Scene, TractionFree, simulate
+from cracklab import Grid, InputError, Loading, Material, Numerics, Record, Scene, TractionFree, simulate
 from cracklab.model.scene_io import scenes_equal
 from cracklab.solver.halfspace import HalfSpace
-from cracklab.solver.interfaces import Identical, for_scene, interface
+from cracklab.solver.interfaces import Bimaterial, Identical, for_scene, interface
 
 MAT = Material(mu=2.0, cs=1.5, nu=0.3)
 PLANE = Grid(n1=64, n3=1, L1=1.0, L3=1.0)
@@ -39,8 +39,9 @@ def test_replace_a_material_replaces_both_sides():
     (dict(material=None), "material"),
     (dict(material=None, materials=(MAT,)), "materials"),
     (dict(material=None, materials=(MAT, "granite")), "materials.bottom"),
-    # two materials need the product scheme (auto picks the displacement scheme for mode I)
-    (dict(material=None, materials=(Material(mu=1.0, cs=1.0, nu=0.25), MAT)), "numerics.formulation"),
+    # two materials need the product scheme: an explicit other one is refused
+    (dict(material=None, materials=(Material(mu=1.0, cs=1.0, nu=0.25), MAT),
+          numerics=Numerics(formulation="displacement")), "numerics.formulation"),
     (dict(materials=(Material(mu=1.0, cs=1.0, nu=0.25),) * 2), "material"),
     (dict(material={"mu": 1.0}), "material"),
 ])
@@ -116,3 +117,33 @@ def test_toml_takes_one_material_or_the_two_sides():
     with pytest.raises(InputError) as err:
         Scene.from_toml(head + f"[materials.top]\n{body}\n\n" + tail)
     assert err.value.field == "materials"
+
+
+def test_auto_takes_a_scheme_the_pair_of_materials_runs():
+    """Numerics() (formulation "auto") on two different materials in mode I: the interface
+    runs the product schemes only, so "auto" takes the product scheme, not the displacement
+    scheme it takes for one material; an explicit scheme the pair does not run is refused
+    with the accepted ones named."""
+    other = Material(mu=1.0, cs=1.0, nu=0.25)
+    sc = scene(material=None, materials=(other, MAT))
+    assert sc.numerics.formulation == "auto" and sc.formulation == "product"
+    assert sc.components == (2,)
+    assert np.isfinite(simulate(sc).delta_2.values).all()
+    for name in ("displacement", "velocity"):
+        with pytest.raises(InputError) as err:
+            sc.replace(numerics=Numerics(formulation=name))
+        assert err.value.field == "numerics.formulation"
+        assert f"got {name!r}" in str(err.value) and "'product' or 'product2'" in str(err.value)
+    assert sc.replace(numerics=Numerics(formulation="product2")).formulation == "product2"
+    assert Bimaterial.auto_scheme("displacement") == "product" and Bimaterial.auto_scheme("product2") == "product2"
+
+
+@pytest.mark.parametrize("loading, expected", [(Loading(tau0_2=1.0), "displacement"),
+                                               (Loading(tau0_1=1.0), "product"),
+                                               (Loading(tau0_3=1.0), "product")])
+def test_auto_on_one_material_is_unchanged(loading, expected):
+    """One material: "auto" is the displacement scheme in mode I, product with shear
+    (the interface of one material runs every scheme)."""
+    sc = scene(loading=loading)
+    assert sc.formulation == expected
+    assert Identical.auto_scheme(expected) == expected

@@ -8,7 +8,8 @@ registered with :func:`register`. The class says, before any is built:
   one registered type accepts a pair), and ``build(top, bottom, grid, dt, components,
   **options)`` the interface;
 * ``accepts_scheme(scheme)`` and ``scheme_error(formulation)``: the time schemes it runs,
-  and the message that refuses another;
+  and the message that refuses another; ``auto_scheme(preferred)``: the scheme it runs for
+  ``Numerics(formulation="auto")``;
 * ``margin``: the fraction of the smaller side's stable beta a scene may use (and
   ``margin_note``, what the refusal of a larger beta says of it);
 * ``engine_channels(scene)``: the (kernel, material) of each history engine it builds, for
@@ -62,6 +63,20 @@ class Interface:
     def accepts_scheme(cls, scheme) -> bool:
         """Whether it runs the time scheme ``scheme`` (solver/schemes): every one by default."""
         return True
+
+    @classmethod
+    def auto_scheme(cls, preferred: str) -> str:
+        """The scheme ``formulation="auto"`` runs on this interface: ``preferred`` (the
+        choice by the active components, model.scene.resolve_formulation) when it is accepted,
+        else the first accepted scheme in the order of ``schemes.SCHEMES``."""
+        from ..schemes import SCHEMES
+
+        if cls.accepts_scheme(preferred):
+            return preferred
+        accepted = [name for name in SCHEMES if cls.accepts_scheme(name)]
+        if not accepted:
+            raise LookupError(f"the {cls.__name__} interface accepts none of the schemes {list(SCHEMES)}")
+        return accepted[0]
 
     @classmethod
     def scheme_error(cls, formulation) -> str:

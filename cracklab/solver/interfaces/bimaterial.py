@@ -89,7 +89,8 @@ class Bimaterial(Interface):
     @classmethod
     def scheme_error(cls, formulation) -> str:
         names = " or ".join(repr(name) for name, s in SCHEMES.items() if cls.accepts_scheme(s))
-        return f"a pair of different materials runs the product scheme ({names}); got {formulation!r}"
+        return (f"a pair of different materials runs the product scheme ({names}); got {formulation!r} "
+                f"(formulation 'auto' takes {cls.auto_scheme('displacement')!r})")
 
     @classmethod
     def margin_note(cls) -> str:
