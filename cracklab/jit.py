@@ -1,4 +1,9 @@
-"""Compiling cracklab's elementwise loops with numba: one registry and one decorator.
+"""Compiling cracklab's loops with numba: one compile helper (``njit``) and, for the
+elementwise loops of a step, one registry and one decorator (``loop``).
+
+``njit(**options)`` is numba.njit with what every cracklab loop takes: cached on disk and
+releasing the GIL; a loop adds its own options (the engine's ``parallel`` and
+``fastmath``, the laws' ``error_model="numpy"``).
 
 A loop is a plain Python function over flat arrays, registered with ``@loop(name)``; its
 callers take the compiled version with ``compiled_loop(name)`` (None without numba, or
@@ -18,6 +23,13 @@ _JIT: dict = {}
 _STATE = {"python_only": False}
 
 
+def njit(**options):
+    """numba.njit(cache=True, nogil=True, **options): the decorator of every compiled loop."""
+    import numba
+
+    return numba.njit(**{"cache": True, "nogil": True, **options})
+
+
 def loop(name: str):
     """Register the decorated function as the loop ``name`` (returned unchanged)."""
     def register(fn):
@@ -34,11 +46,11 @@ def compiled_loop(name: str):
         return None
     if name not in _JIT:
         try:
-            import numba
+            import numba  # noqa: F401
         except Exception:  # pragma: no cover
             _JIT[name] = None
         else:
-            _JIT[name] = numba.njit(cache=True, nogil=True, error_model="numpy")(_PY[name])
+            _JIT[name] = njit(error_model="numpy")(_PY[name])
     return _JIT[name]
 
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import numba
 
+from ..jit import njit
 # BLOCK: steps per call of advance (every ring holds at least this many inputs; the eight
 # steps are written out below)
 from .base import BLOCK
@@ -42,7 +43,7 @@ if BLOCK != 8:  # pragma: no cover - the steps of advance are written out for 8
     raise ImportError(f"cracklab.history.blocked is written for blocks of 8 steps, not {BLOCK}")
 
 
-@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
+@njit(parallel=True, fastmath=True)
 def advance(n, lo, hi, lstart, jd, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
     """Advance the states of modes lo..hi-1 through steps n..n+7; F[(n+j) % 8, m] = tail sum
     of step n+j for each mode m (plus, for Jd > 8, the taps sum_{8 <= k < Jd} w_k x_{n+j-k},
@@ -213,7 +214,7 @@ def advance(n, lo, hi, lstart, jd, R, L, wl, RR, RI, ER, EI, Ar, Ai, Br, Bi, F):
                     F[(n + r) & 7, m] = complex(f.real + kr, f.imag + ki)
 
 
-@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
+@njit(parallel=True, fastmath=True)
 def pretaps(n, W, R, F):
     """F[n % 8, m] += sum_{1 <= j < 8} W[j, m] x_{n-j}, x_{n-j} = R[(n - j) % 8, m]: the taps of
     step n on inputs already kept, added ahead of the step (after advance has written the
@@ -232,7 +233,7 @@ def pretaps(n, W, R, F):
             F[k, m] = complex(f.real + sr, f.imag + si)
 
 
-@numba.njit(cache=True, nogil=True, parallel=True, fastmath=True)
+@njit(parallel=True, fastmath=True)
 def taps(x, n, W, R, F, out, scale, scaled, ahead):
     """out[m] = F[n % 8, m] + sum_{j < 8} W[j, m] x_{n-j} (times scale[m] if ``scaled``), and
     R[n % 8, m] = x_n; x_{n-j} = R[(n - j) % 8, m].  With ``ahead``, F already holds the taps

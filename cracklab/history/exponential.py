@@ -47,6 +47,7 @@ import time
 import numpy as np
 
 from ..errors import InputError
+from ..jit import njit
 from ..elastic.kernels import FACE_KERNELS
 from ..elastic.modes import gammas_sample, mode_gamma, modes
 from ..elastic.weights import FORMULATIONS, RULES, convolution_weights, product_taps
@@ -149,7 +150,7 @@ def _make_power_sum():
     except Exception:  # pragma: no cover
         return _power_sum_numpy
 
-    @numba.njit(cache=True, nogil=True, parallel=True)
+    @njit(parallel=True)
     def power_sum(pw, rho, coef, factor, out):
         for u in numba.prange(pw.shape[0]):
             acc = 0.0

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError, SimulationError
+from ..jit import njit
 from .base import SHEAR, bonded_mask, check_parameter, parameter
 from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 from .solve import solve_velocity
@@ -451,10 +452,10 @@ def _kernel():
             for option in LLVM_OPTIONS:
                 llvm.set_option("", option)
             _compile_at(numba)
-            jit = numba.njit(cache=True, nogil=True, error_model="numpy")
+            jit = njit(error_model="numpy")
             g = globals()
             for name in _HELPERS:           # the pass calls them by their global names, inlined
-                g[name] = numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")(g[name])
+                g[name] = njit(error_model="numpy", inline="always")(g[name])
             for name in _PASSES:            # :func:`_chunked` calls them by their global names
                 g[name] = jit(g[name])
             _KERNEL.append(jit(_chunked))
