@@ -63,8 +63,32 @@ def _outcome(sc, first, wall) -> str:
     return (f"complete: ran {sc.nsteps} steps ({_when(sc, sc.nsteps)} simulated) in {_fmt_time(wall)} wall")
 
 
+def _scene_of(scene: str, sets, allow):
+    """The scene SCENE names: a TOML file or a store, else a registered builder called
+    with the ``--set`` assignments (as ``cracklab new``)."""
+    import os
+
+    from ..errors import InputError
+    from ..scenes.registry import registered_builders
+
+    if os.path.exists(scene):
+        if sets:
+            raise click.UsageError(f"--set is for a builder's arguments ({scene} is a file: edit it, or write "
+                                   f"a new one with cracklab new)")
+        return _load_scene(scene, allow=allow)
+    if scene in registered_builders():
+        from .cmd_new import build
+
+        return build(scene, sets)
+    raise InputError("SCENE", f"{scene!r}: no such file or store, nor a scene builder (cracklab new --list "
+                              f"lists them)")
+
+
 @main.command(context_settings=CONTEXT)
-@click.argument("scene", type=click.Path(exists=True))
+@click.argument("scene")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="With SCENE a builder's name: an argument of the builder or a scene path, as for "
+                   "cracklab new (repeatable): cracklab run tpv3 --set dx=400 -o tpv3.zarr.")
 @click.option("-o", "--output", default=None, type=click.Path(), help="Zarr store to write (required but "
               "with --dry-run): a local path, or a URL (s3://..., written without checkpoints).")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
@@ -88,14 +112,15 @@ def _outcome(sc, first, wall) -> str:
 @click.option("--allow-files", "allow", multiple=True, metavar="DIR", type=click.Path(file_okay=False),
               help="Also read the scene's field files from DIR (repeatable); without it a scene reads them "
                    "only from its own folder and below (and the folders of env CRACKLAB_ALLOW_FILES).")
-def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_run, no_memory_check, no_disk_check,
-        allow) -> None:
-    """Run SCENE (a TOML scene or the Zarr store of an earlier run) into OUTPUT.
+def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite, dry_run, no_memory_check,
+        no_disk_check, allow) -> None:
+    """Run SCENE (a TOML scene, the Zarr store of an earlier run, or the name of a scene
+    builder with its --set arguments) into OUTPUT.
 
     Ends with a line on stderr saying how it ended: complete (the steps run, the simulated
     and the wall time; or resumed from step N), interrupted at step N, or failed (the
-    error; what was recorded is kept in OUTPUT), and "wrote OUTPUT" on stdout. A new
-    SCENE from a builder: cracklab new tpv3 dx=400 -o tpv3.toml.
+    error; what was recorded is kept in OUTPUT), and "wrote OUTPUT" on stdout. A builder's
+    scene as a file: cracklab new tpv3 dx=400 -o tpv3.toml.
 
     Ctrl-C stops the run after the step in progress and checkpoints it: the same command
     continues it. Exit status 130 when interrupted, 1 on an error."""
@@ -107,7 +132,7 @@ def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_r
     from ..output.simulate import simulate
 
     try:
-        sc = _load_scene(scene, allow=allow)
+        sc = _scene_of(scene, sets, allow)
     except InputError as exc:
         raise fail(exc) from None
     if dry_run:

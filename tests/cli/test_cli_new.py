@@ -1,11 +1,13 @@
-"""`cracklab new`: a scene TOML from a registered builder and key=value arguments, as a
-process."""
+"""`cracklab new`: a scene TOML from a registered builder and key=value arguments, and
+`cracklab run BUILDER --set KEY=VALUE`, as processes."""
 from __future__ import annotations
 
 import dataclasses
 import subprocess
 import sys
 from pathlib import Path
+
+import xarray as xr
 
 import cracklab
 from cracklab.model.scene_io import scenes_equal
@@ -68,3 +70,20 @@ def test_new_list_shows_every_builder_with_its_first_sentence():
     assert "SCEC TPV3" in tpv3
     asperity = next(ln for ln in res.stdout.splitlines() if ln.startswith("asperity_row "))
     assert asperity.endswith("(section 4, Figs. 12-13).")      # a sentence, not cut at "Figs."
+
+
+def test_run_takes_a_builder_name_with_its_arguments(tmp_path):
+    out = tmp_path / "lamb.zarr"
+    res = cli("run", "lamb", "--set", "n=16", "--set", "t_end=0.2", "--set", "record.every=3", "-o", out,
+              "--no-progress")
+    assert res.returncode == 0, res.stderr
+    got = cracklab.scene_of(xr.open_zarr(out, consolidated=False))
+    want = cracklab.scenes.lamb(n=16, t_end=0.2)
+    assert scenes_equal(got, want.replace(record=dataclasses.replace(want.record, every=3)))
+    line = error_line(cli("run", "lamb_typo", "-o", tmp_path / "x.zarr"))
+    assert "'lamb_typo': no such file or store, nor a scene builder" in line
+    toml = tmp_path / "s.toml"
+    assert cli("new", "lamb", "n=16", "t_end=0.2", "-o", toml).returncode == 0
+    res = cli("run", toml, "--set", "n=32", "-o", tmp_path / "y.zarr")
+    assert res.returncode == 2 and "--set is for a builder's arguments" in res.stderr
+    assert not (tmp_path / "x.zarr").exists() and not (tmp_path / "y.zarr").exists()
