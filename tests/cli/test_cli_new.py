@@ -3,29 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
-import subprocess
-import sys
-from pathlib import Path
 
 import xarray as xr
 
 import cracklab
 from cracklab.model.scene_io import scenes_equal
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def cli(*args, cwd=ROOT, timeout=600):
-    return subprocess.run([sys.executable, "-m", "cracklab.cli", *map(str, args)], cwd=cwd, capture_output=True,
-                          text=True, timeout=timeout)
-
-
-def error_line(res) -> str:
-    assert res.returncode != 0, res.stdout
-    assert "Traceback" not in res.stderr, res.stderr
-    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("Error: "), res.stderr
-    return lines[0]
+from cli_process import cli, error_line
 
 
 # ---------------------------------------------------------------------------- cracklab new

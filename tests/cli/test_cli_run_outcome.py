@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -16,22 +13,8 @@ import cracklab
 from cracklab.cli import main
 from cracklab.output import disk
 
+from cli_process import cli, error_line
 from interrupt import interrupted_run
-
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def cli(*args, cwd=ROOT, timeout=600):
-    return subprocess.run([sys.executable, "-m", "cracklab.cli", *map(str, args)], cwd=cwd, capture_output=True,
-                          text=True, timeout=timeout)
-
-
-def error_line(res) -> str:
-    assert res.returncode != 0, res.stdout
-    assert "Traceback" not in res.stderr, res.stderr
-    lines = [ln for ln in res.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1 and lines[0].startswith("Error: "), res.stderr
-    return lines[0]
 
 
 def small_scene(tmp_path, name="s.toml", **args):
