@@ -6,11 +6,12 @@ import sys
 
 import click
 
-from .common import CONTEXT, _fmt_time, _interrupted, _load_scene, fail, main
+from .common import CONTEXT, _disk_line, _fmt_time, _interrupted, _load_scene, _note, fail, main
 
 
-def _dry_run_scene(sc, source: str) -> bool:
-    """Print what a run of ``sc`` would take; False when it does not fit in memory."""
+def _dry_run_scene(sc, source: str, output=None) -> bool:
+    """Print what a run of ``sc`` would take; False when it does not fit in memory or on
+    the disk of ``output``."""
     from ..errors import MemoryBudgetError
     from ..history import resolve_engine
     from ..solver.budget import available_memory, calibrate, check_memory, fmt_bytes, run_memory
@@ -32,22 +33,64 @@ def _dry_run_scene(sc, source: str) -> bool:
     except MemoryBudgetError:
         verdict = "does NOT fit: the run would be refused"
     click.echo(f"  memory    {est.describe()}; {fmt_bytes(avail)} {source_mem}: {verdict}")
+    from ..output.disk import output_size
+
+    line, on_disk = _disk_line(output_size(sc), output)
+    click.echo(line)
     if verdict != "fits":
         click.echo("  run time  not calibrated (the run does not fit in memory)")
         return False
     cal = calibrate(sc)
     click.echo(f"  run time  about {_fmt_time(cal['setup_s'] + cal['run_s'])} ({cal['ms_per_step']:.3g} ms per "
                f"step over {cal['steps_timed']} timed steps, setup {cal['setup_s']:.2g} s)")
-    return True
+    return on_disk
 
 
 RUN_FLAGS = {"checkpoint_every": "--checkpoint-every", "resume": "--resume"}
 
 
+def _when(sc, step) -> str:
+    """"t = 5.77 s" of ``step`` (the time unit of the scene, none for "1")."""
+    u = sc.units["time"]
+    return f"t = {step * sc.dt:.4g}{'' if u == '1' else ' ' + u}"
+
+
+def _outcome(sc, first, wall) -> str:
+    """The line that ends a complete run: steps run, simulated time, wall time."""
+    if first:
+        return (f"complete: resumed from step {first}, ran steps {first + 1} to {sc.nsteps} ({_when(sc, first)} "
+                f"to {_when(sc, sc.nsteps)[4:]} simulated) in {_fmt_time(wall)} wall")
+    return (f"complete: ran {sc.nsteps} steps ({_when(sc, sc.nsteps)} simulated) in {_fmt_time(wall)} wall")
+
+
+def _scene_of(scene: str, sets, allow):
+    """The scene SCENE names: a TOML file or a store, else a registered builder called
+    with the ``--set`` assignments (as ``cracklab new``)."""
+    import os
+
+    from ..errors import InputError
+    from ..scenes.registry import registered_builders
+
+    if os.path.exists(scene):
+        if sets:
+            raise click.UsageError(f"--set is for a builder's arguments ({scene} is a file: edit it, or write "
+                                   f"a new one with cracklab new)")
+        return _load_scene(scene, allow=allow)
+    if scene in registered_builders():
+        from .cmd_new import build
+
+        return build(scene, sets)
+    raise InputError("SCENE", f"{scene!r}: no such file or store, nor a scene builder (cracklab new --list "
+                              f"lists them)")
+
+
 @main.command(context_settings=CONTEXT)
-@click.argument("scene", type=click.Path(exists=True))
+@click.argument("scene")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="With SCENE a builder's name: an argument of the builder or a scene path, as for "
+                   "cracklab new (repeatable): cracklab run tpv3 --set dx=400 -o tpv3.zarr.")
 @click.option("-o", "--output", default=None, type=click.Path(), help="Zarr store to write (required but "
-              "with --dry-run).")
+              "with --dry-run): a local path, or a URL (s3://..., written without checkpoints).")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
 @click.option("--checkpoint-every", default=None, metavar="N|Ss",
               help="Checkpoint the run into OUTPUT every N steps, or every S seconds of wall time "
@@ -55,29 +98,45 @@ RUN_FLAGS = {"checkpoint_every": "--checkpoint-every", "resume": "--resume"}
 @click.option("--resume/--no-resume", default=True, show_default=True,
               help="When OUTPUT holds an unfinished run of the same scene (killed, interrupted), continue "
                    "it from its last checkpoint (same results); when it holds the complete run, do nothing. "
-                   "--no-resume starts the run over.")
+                   "--no-resume starts the run over. Needs a local OUTPUT.")
 @click.option("--overwrite", is_flag=True,
-              help="Replace OUTPUT even when it holds the run of another scene (refused otherwise).")
+              help="Replace OUTPUT even when it holds the run of another scene (refused otherwise). Only "
+                   "cracklab run stores are replaced, never other files or folders.")
 @click.option("--dry-run", is_flag=True,
-              help="Print the memory estimate, the steps and an estimated run time (from a few timed steps); "
-                   "write nothing.")
+              help="Print the memory estimate, the output's size bound and the free disk space, the steps "
+                   "and an estimated run time (from a few timed steps); write nothing.")
 @click.option("--no-memory-check", is_flag=True,
               help="Run even when the memory estimate exceeds the memory available.")
-def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_run, no_memory_check) -> None:
-    """Run SCENE (a TOML scene or the Zarr store of an earlier run) into OUTPUT.
+@click.option("--no-disk-check", is_flag=True,
+              help="Run even when the bound on the output's size exceeds the free space of OUTPUT's disk.")
+@click.option("--allow-files", "allow", multiple=True, metavar="DIR", type=click.Path(file_okay=False),
+              help="Also read the scene's field files from DIR (repeatable); without it a scene reads them "
+                   "only from its own folder and below (and the folders of env CRACKLAB_ALLOW_FILES).")
+def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite, dry_run, no_memory_check,
+        no_disk_check, allow) -> None:
+    """Run SCENE (a TOML scene, the Zarr store of an earlier run, or the name of a scene
+    builder with its --set arguments) into OUTPUT.
+
+    Ends with a line on stderr saying how it ended: complete (the steps run, the simulated
+    and the wall time; or resumed from step N), interrupted at step N, or failed (the
+    error; what was recorded is kept in OUTPUT), and "wrote OUTPUT" on stdout. A builder's
+    scene as a file: cracklab new tpv3 dx=400 -o tpv3.toml.
 
     Ctrl-C stops the run after the step in progress and checkpoints it: the same command
     continues it. Exit status 130 when interrupted, 1 on an error."""
-    from ..errors import InputError, Interrupted, SimulationError, StoreError
+    import time
+    import warnings
+
+    from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
     from ..output import checkpoint
     from ..output.simulate import simulate
 
     try:
-        sc = _load_scene(scene)
+        sc = _scene_of(scene, sets, allow)
     except InputError as exc:
         raise fail(exc) from None
     if dry_run:
-        if not _dry_run_scene(sc, scene):
+        if not _dry_run_scene(sc, scene, output):
             sys.exit(1)
         return
     if output is None:
@@ -85,7 +144,16 @@ def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_r
     if progress is None:
         progress = sys.stderr.isatty()
     path = checkpoint.local_path(output)
-    done = False
+    typed = click.get_current_context().get_parameter_source
+    done, first = False, 0
+    if path is None:            # a URL: simulate writes it, but checkpoints only into a local path
+        if typed("resume") == click.core.ParameterSource.COMMANDLINE and resume:
+            raise click.ClickException(f"--resume: {output} is a URL; runs into an object store have no "
+                                       f"checkpoints to resume from: drop --resume, or write to a local path")
+        resume = False
+        _note(f"{output} is a URL: the run is written there without checkpoints"
+              f"{' (--checkpoint-every ignored)' if checkpoint_every is not None else ''}, so an interrupted "
+              f"run starts over; for a resumable run write to a local path and copy the store")
     try:
         if path is not None:
             kind, attrs = checkpoint.inspect(path)
@@ -96,39 +164,52 @@ def run(scene: str, output, progress, checkpoint_every, resume, overwrite, dry_r
                                            f"replace it: choose another -o, or --overwrite")
                 resume = resume and same and not overwrite
                 done = resume and attrs.get("cracklab_status") == "complete"
+                if resume and not done:
+                    first = int(checkpoint.read_entry(path, "n") or 0)
             else:
+                if overwrite and kind in ("other", "ensemble"):
+                    what = "an ensemble store (cracklab sweep)" if kind == "ensemble" else \
+                        "not a cracklab run store (nor empty)"
+                    raise StoreError(path, f"exists and is {what}; --overwrite replaces only cracklab run "
+                                           f"stores: choose another -o, or delete it yourself")
                 resume = False              # nothing of this scene to continue
     except (StoreError, InputError) as exc:
         raise fail(exc, RUN_FLAGS) from None
-    import warnings
-
-    from ..errors import StoreWarning
-
+    t0 = time.monotonic()
+    caught = []
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", StoreWarning)
-            try:
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", StoreWarning)
                 simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume,
-                         check_memory=not no_memory_check)
-            finally:
-                for w in caught:
-                    if issubclass(w.category, StoreWarning):
-                        click.echo(f"cracklab: {w.message}", err=True)
-                    else:
-                        warnings.showwarning(w.message, w.category, w.filename, w.lineno)
-        done = done and not any(issubclass(w.category, StoreWarning) for w in caught)
+                         check_memory=not no_memory_check, check_disk=not no_disk_check)
+        finally:
+            # shown once the recording has stopped: while it records, showwarning appends to ``caught``
+            for w in caught:
+                if issubclass(w.category, StoreWarning):
+                    click.echo(f"cracklab: {w.message}", err=True)
+                else:
+                    warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+        if any(issubclass(w.category, StoreWarning) for w in caught):
+            done, first = False, 0              # a damaged store: the run was done again from the start
     except Interrupted as exc:
-        _interrupted(f"interrupted at step {exc.step}; rerun the same command to resume")
+        _interrupted(f"interrupted at step {exc.step}; {_when(sc, exc.step)} simulated of t_end = {sc.t_end:g}, "
+                     f"{_fmt_time(time.monotonic() - t0)} wall; rerun the same command to resume")
     except KeyboardInterrupt:
         step = checkpoint.read_entry(path, "n") if path is not None else None
         _interrupted(f"interrupted at step {step}; rerun the same command to resume" if step is not None else
                      "interrupted before the first checkpoint; rerun the same command to start again")
-    except (SimulationError, StoreError, InputError) as exc:
+    except SimulationError as exc:
+        kept = f"; what was recorded up to it is kept in {output} (status failed)" if output else ""
+        raise click.ClickException(f"the run failed after {_fmt_time(time.monotonic() - t0)} wall: {exc}"
+                                   f"{kept}") from None
+    except (StoreError, InputError) as exc:
         raise fail(exc, RUN_FLAGS) from None
     if done:
         click.echo(f"cracklab: {output} holds this run, complete (checked); nothing to do (--no-resume computes "
                    f"it again)")
     else:
+        _note(_outcome(sc, first, time.monotonic() - t0))
         click.echo(f"cracklab: wrote {output}")
 
 

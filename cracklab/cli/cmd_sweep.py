@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .common import CONTEXT, _fmt_time, _interrupted, _read_toml, fail, main
+from .common import CONTEXT, _disk_line, _fmt_time, _interrupted, _read_toml, fail, main
 
 
 SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"}
@@ -31,13 +31,18 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
                    "time (from a few timed steps of the largest member); start nothing.")
 @click.option("--no-memory-check", is_flag=True,
               help="Run even when the members' memory exceeds the memory available.")
+@click.option("--no-disk-check", is_flag=True,
+              help="Run even when the bound on the members' output exceeds the free space of OUTPUT's disk.")
+@click.option("--allow-files", "allow", multiple=True, metavar="DIR", type=click.Path(file_okay=False),
+              help="Also read the field files of the study's base scene (study.scene) from DIR (repeatable); "
+                   "without it they are read only from that scene file's folder and below.")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
 @click.option("--import", "imports", multiple=True, metavar="MODULE",
               help="Import this Python module first (repeatable): a module of yours that registers "
                    "scene builders with cracklab.register_builder. A study file itself never imports "
                    "code: it names only registered builders.")
-def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no_memory_check, progress,
-          imports) -> None:
+def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no_memory_check, no_disk_check, allow,
+          progress, imports) -> None:
     """Run the ensemble of STUDY (a STUDY.toml, see docs/guide/ensembles.md) into OUTPUT.
 
     Every member's scene paths and parameter types are checked, and its memory estimated,
@@ -58,7 +63,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
             raise click.ClickException(f"--import: cannot import {module!r}: {type(exc).__name__}: {exc}") from None
     try:
         _read_toml(study, "a study: [study], [base], [sweep], [[members]]")
-        spec = load_study(study)
+        spec = load_study(study, allow=allow)
         if dry_run:
             if not _dry_run_sweep(spec, study, output, workers, resume):
                 sys.exit(1)
@@ -66,7 +71,8 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
         if output is None:
             raise click.UsageError("Missing option '-o' / '--output' (the Zarr store of the ensemble).")
         result = run_study(spec, output, scheduler=scheduler, workers=workers, resume=resume,
-                           progress=progress, overwrite=overwrite, check_memory=not no_memory_check)
+                           progress=progress, overwrite=overwrite, check_memory=not no_memory_check,
+                           check_disk=not no_disk_check)
     except InputError as exc:
         raise fail(exc, SWEEP_FLAGS) from None
     except OSError as exc:       # a read-only location, a full disk, ...
@@ -92,7 +98,8 @@ def _sweep_interrupted(output) -> str:
 
 
 def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
-    """Print what the sweep of ``spec`` would take; False when it does not fit in memory."""
+    """Print what the sweep of ``spec`` would take; False when it does not fit in memory or
+    on the disk of ``output``."""
     from ..ensemble import plan
     from ..ensemble.running import cores, preflight
     from ..ensemble.store import is_complete, store_str
@@ -100,7 +107,8 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     from ..solver.budget import PROCESS_BYTES, available_memory, calibrate, check_memory, fmt_bytes
 
     members = plan(spec.base, spec.sweep)
-    estimates = preflight(spec.base, members, sweep=spec.sweep)
+    outputs = {}
+    estimates = preflight(spec.base, members, sweep=spec.sweep, outputs=outputs)
     done = [m for m in members if output and resume and os.path.isdir(output) and is_complete(store_str(output), m.id)]
     todo = [m for m in members if m not in done]
     click.echo(f"cracklab: dry run of the study {spec.name!r} ({source}); every member checked, nothing is written")
@@ -128,6 +136,14 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
         verdict = "does NOT fit: the sweep would be refused"
     click.echo(f"  memory    largest member {largest.describe()}; {n} worker process{'es' if n > 1 else ''}: "
                f"{fmt_bytes(n * (largest.total + PROCESS_BYTES))} of {fmt_bytes(avail)} {source_mem}: {verdict}")
+    from ..ensemble.running import sweep_output
+
+    sizes = [outputs[mid] for mid in known if mid in outputs]
+    on_disk = True
+    if sizes:
+        label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
+        line, on_disk = _disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
+        click.echo(line)
     if verdict != "fits":
         return False
     from ..ensemble import build_scene
@@ -145,4 +161,4 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     click.echo(f"  run time  about {_fmt_time(wall)} on {n} worker{'s' if n > 1 else ''} ({_fmt_time(sum(per.values()))} "
                f"of member runs; the largest timed: {cal['ms_per_step']:.3g} ms per step over {cal['steps_timed']} "
                f"steps)")
-    return True
+    return on_disk

@@ -54,7 +54,9 @@ def _read_toml(path: str, what: str) -> dict:
     return data
 
 
-def _load_scene(path: str):
+def _load_scene(path: str, allow=()):
+    """The scene of a TOML file (its field files read from its folder and below, or the
+    ``allow`` folders) or of the store of an earlier run."""
     from ..errors import InputError
 
     if path.endswith(".toml") or not os.path.isdir(path):     # a scene TOML, whatever its name
@@ -63,7 +65,7 @@ def _load_scene(path: str):
         from ..model.scene_io import scene_from_data
 
         data = _read_toml(path, "a scene: [material], [grid], [law], [loading], t_end")
-        return scene_from_data(data, base=Path(path).absolute().parent)  # file references relative to it
+        return scene_from_data(data, base=Path(path).absolute().parent, allow=allow)  # references relative to it
     import xarray as xr
 
     from ..output.simulate import scene_of
@@ -89,6 +91,28 @@ def _fmt_time(seconds: float) -> str:
     if seconds < 5400:
         return f"{seconds / 60:.3g} min"
     return f"{seconds / 3600:.3g} h"
+
+
+def _disk_line(estimate, output, what: str = "the run", reuse: bool = True, label: str = "output") -> tuple[str, bool]:
+    """(the dry run's line on the output's size and the free disk space, whether it fits);
+    ``output``: the store (None: the current directory); ``label``: what writes it."""
+    from ..errors import DiskBudgetError
+    from ..output import disk
+    from ..solver.budget import fmt_bytes
+
+    head = f"  disk      {label} {estimate.describe()}; "
+    if output is not None and "://" in str(output):
+        return head + f"{output} is a URL: free space not checked", True
+    where = output if output is not None else "."
+    where_text = f"free where {output} goes" if output is not None else "free in the current directory (no -o)"
+    try:
+        room = disk.check_disk(estimate, where, what=what, reuse=reuse)
+    except DiskBudgetError:
+        return head + f"{fmt_bytes(disk.free_space(where))} {where_text}: does NOT fit: {what} would be refused " \
+                      f"(--no-disk-check runs it anyway)", False
+    if room == 0:
+        return head + f"{where} is not writable: not checked", True
+    return head + f"{fmt_bytes(room)} {where_text}: fits", True
 
 
 def _note(text: str):

@@ -268,10 +268,18 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
             return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
                                scheduler=scheduler, workers=workers, progress=progress,
                                fft_threads=fft_threads, replace=replace, memory_limit=memory_limit,
-                               address=address)
+                               address=address, check_disk=check_disk)
     finally:
         if own is not None:
             own.close()
+
+
+def sweep_output(outputs):
+    """The OutputEstimate of members together (``outputs``: theirs, at least one)."""
+    from ..output.disk import OutputEstimate
+
+    return OutputEstimate(snapshots=sum(o.snapshots for o in outputs), fields=max(o.fields for o in outputs),
+                          raw=sum(o.raw for o in outputs), bound=sum(o.bound for o in outputs))
 
 
 def _check_sweep_disk(store, outputs, ntodo):
@@ -279,10 +287,9 @@ def _check_sweep_disk(store, outputs, ntodo):
     file system has free (cracklab.output.disk)."""
     if not outputs:
         return
-    from ..output.disk import OutputEstimate, check_disk
+    from ..output.disk import check_disk
 
-    total = OutputEstimate(snapshots=sum(o.snapshots for o in outputs), fields=max(o.fields for o in outputs),
-                           raw=sum(o.raw for o in outputs), bound=sum(o.bound for o in outputs))
+    total = sweep_output(outputs)
     what = f"the sweep's {len(outputs)} member{'s' if len(outputs) != 1 else ''} to run" + \
         (f" (of {ntodo}; the others are built on the workers)" if len(outputs) < ntodo else "")
     check_disk(total, store, what=what, reuse=False,
@@ -357,7 +364,8 @@ def _clear(store: str):
 
 
 def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
-                progress, fft_threads, replace=False, memory_limit="auto", address=None) -> SweepResult:
+                progress, fft_threads, replace=False, memory_limit="auto", address=None,
+                check_disk=True) -> SweepResult:
     from ..model.scene import Scene
 
     if replace:
@@ -394,7 +402,7 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         from tqdm import tqdm
 
         for m in tqdm(todo, desc="members", unit="member", disable=not progress, file=sys.stderr):
-            r = _run_member(store, m, base, fft_threads, own(m))
+            r = _run_member(store, m, base, fft_threads, own(m), check_disk=check_disk)
             if r["status"] != "complete":
                 result.failed[m.id] = r.get("error", "failed")
     elif todo:
@@ -409,7 +417,8 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                   file=sys.stderr, flush=True)
         with dask_client(client, scheduler, workers, len(todo), memory_limit=memory_limit) as c:
             base_arg = c.scatter(base, broadcast=True) if base is not None else None
-            futures = {c.submit(_run_member, store, m, base_arg, fft_threads, own(m), pure=False,
+            futures = {c.submit(_run_member, store, m, base_arg, fft_threads, own(m), check_disk=check_disk,
+                                pure=False,
                                 key=f"cracklab-member-{m.id}-{os.urandom(3).hex()}"): m for m in todo}
             bar = tqdm(total=len(todo), desc="members", unit="member", disable=not progress,
                        file=sys.stderr, dynamic_ncols=True)
@@ -459,7 +468,7 @@ def _spec_of(base_scene, sweep: Sweep) -> dict:
 
 
 # ---------------------------------------------------------------------------- the worker task
-def _run_member(store: str, member: Member, base, fft_threads=1, builders=None) -> dict:
+def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, check_disk=True) -> dict:
     """Worker task: build, run and write one member; mark it complete last. Never raises
     for a member's own failure: the error goes to the member's attrs and the result.
 
@@ -468,7 +477,8 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None) 
     complete (or failed), so that a reader never finds a group marked complete whose
     arrays are being rewritten. Other groups (absent, failed, interrupted, damaged:
     none marked complete) are cleared and written in place. ``builders``: {name: function}
-    of the member's builder, resolved by the client (a worker has no registrations of its own)."""
+    of the member's builder, resolved by the client (a worker has no registrations of its own).
+    ``check_disk``: the member's own disk check (``simulate``; off with the sweep's)."""
     t0 = time.perf_counter()
     os.environ.setdefault("CRACKLAB_FFT_THREADS", "1")
     path = member_path(store, member.id)
@@ -488,7 +498,7 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None) 
         g = open_group(target, "w")          # clears whatever an earlier attempt left
         g.update_attributes({**meta, "status": "running", "complete": False})
         scene = build_scene(base, member.params, fft_threads=fft_threads, builders=builders)
-        simulate(scene, store=target)
+        simulate(scene, store=target, check_disk=check_disk)
         g = open_group(target, "a")
         elapsed = time.perf_counter() - t0
         g.update_attributes({**meta, "status": "complete", "elapsed_s": round(elapsed, 3)})

@@ -26,8 +26,10 @@ def _flatten(table: dict, where: str) -> dict:
 STUDY_KEYS = ("name", "builder", "scene", "entropy", "replicates", "seed_arg", "description")
 
 
-def load_study(path) -> Study:
-    """Read a STUDY.toml (see docs/guide/ensembles.md)::
+def load_study(path, allow=()) -> Study:
+    """Read a STUDY.toml (see docs/guide/ensembles.md); the field files of its base scene
+    (``study.scene``) are read from that file's folder and below, or the ``allow``
+    folders (cracklab.model.field_files)::
 
         [study]
         name = "asperity_ensemble"
@@ -77,7 +79,7 @@ def load_study(path) -> Study:
         scene_path = (path.parent / study["scene"])
         if not scene_path.is_file():
             raise InputError("study.scene", f"no such scene file {scene_path}")
-        builder = scene_from_toml_file(scene_path, "study.scene")
+        builder = scene_from_toml_file(scene_path, "study.scene", allow=allow)
     for key in ("name", "seed_arg", "description"):
         if key in study and not isinstance(study[key], str):
             raise InputError(f"study.{key}", f"must be a string, got {study[key]!r}")

@@ -97,7 +97,7 @@ def study_toml(path, *, name="manners", t_end=0.05, sweep="[sweep]\np = [1.0, 1.
 def test_every_command_takes_h_and_o():
     from cracklab.cli import main
 
-    assert set(main.commands) == {"run", "sweep", "plot", "export", "summary", "verify", "bench", "demo"}
+    assert set(main.commands) == {"new", "run", "sweep", "plot", "export", "summary", "verify", "bench", "demo"}
     for command in main.commands:
         res = cli(command, "-h")
         assert res.returncode == 0 and "Usage:" in res.stdout and "-h, --help" in res.stdout, (command, res.stderr)
