@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import optimize
 
 
 def wave_speed_ratio(nu):
@@ -26,6 +25,8 @@ def rayleigh_speed_ratio(nu=0.25):
 
     def f(x):  # R(i s_R) / x; negative near 0, +1 at x = 1
         return ((2.0 - x) ** 2 - 4.0 * math.sqrt(1.0 - x) * math.sqrt(1.0 - x / a**2)) / x
+
+    from scipy import optimize  # here: scipy.optimize takes 20 MB and 0.2 s to import
 
     x = optimize.brentq(f, 1e-12, 1.0, xtol=1e-16, rtol=1e-15, maxiter=200)
     return math.sqrt(x)
