@@ -20,7 +20,7 @@ analytic off the branch cuts from s = +-i and +-i a, like those of the pair.
 
 Time domain, without a closed form: the Taylor series at T = 0 (the coefficients are those
 of the expansion of L[H] in 1/s) for T <= T_s, and the Bromwich integral folded onto the
-branch cuts (solver/cuts.py) beyond, each where it is accurate to ~1e-12. On T_s < T <=
+branch cuts (elastic/cuts.py) beyond, each where it is accurate to ~1e-12. On T_s < T <=
 T_TABLE, where the exact taps of the history engines lie, the cut representation (of H and
 of its first two antiderivatives) is read from piecewise Chebyshev interpolants of it
 (degree 20 on pieces 0.5 long, built once per kernel and nu from the cut sums: they

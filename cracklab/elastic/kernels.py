@@ -54,7 +54,7 @@ from .waves import wave_speed_ratio  # noqa: E402,F401  (kernels.wave_speed_rati
 
 #: the kernels of the pair of one material (Eq. 26)
 KERNELS = ("I", "II", "III")
-#: the kernels of one half space's face (solver/face_kernels.py)
+#: the kernels of one half space's face (elastic/face_kernels.py)
 FACE_KERNELS = _face.FACE_KERNELS
 ALL_KERNELS = KERNELS + FACE_KERNELS
 
@@ -422,7 +422,7 @@ def impedance(kernel, s, nu=0.25):
 
 def branch_transform(kernel, s, A, B, a):
     """L[C_kernel](s) with explicit branch values A = sqrt(1+s^2), B = sqrt(1+s^2/a^2)
-    (the form the branch cuts of history/fit.py and solver/cuts.py evaluate)."""
+    (the form the branch cuts of history/fit.py and elastic/cuts.py evaluate)."""
     if kernel in FACE_KERNELS:
         return _face.branch_transform(kernel, s, A, B, a)
     _check_kernel(kernel)

@@ -178,7 +178,7 @@ def _transform(kernel, s, A, B, a, z0, formulation):
 def cut_density(kernel, b, x, *, nu=0.25, formulation="displacement"):
     """rho_b(x) = [F(ib - x - i0) - F(ib - x + i0)] / (2 pi i), x > 0 (complex array).
 
-    ``b`` is 1 or a = c_d/c_s; g_b(T) = int_0^inf rho_b(x) exp(-x T) dx (solver/cuts.py).
+    ``b`` is 1 or a = c_d/c_s; g_b(T) = int_0^inf rho_b(x) exp(-x T) dx (elastic/cuts.py).
     """
     _check(kernel, formulation)
     a = _k.wave_speed_ratio(nu)

@@ -1,4 +1,4 @@
-"""The kernels of one half space's face (solver/face_kernels.py): checked against the pair's
+"""The kernels of one half space's face (elastic/face_kernels.py): checked against the pair's
 closed forms of Eq. (26), their exact Laplace transforms, the static half space and the
 high-frequency limits worked out by hand."""
 import numpy as np
