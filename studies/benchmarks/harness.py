@@ -41,13 +41,14 @@ def reference_dir(name: str, directory=None) -> Path:
     """The folder of the reference ``name`` (e.g. "tpv3_mdsbi"): ``directory`` when given
     (``--reference DIR``), else ``$CRACKLAB_REFERENCE/<name>``, else the nearest
     ``shared/reference/<name>`` beside the repository's root (``../shared/reference/<name>``)
-    or beside a folder above it."""
+    or beside its parent (a worktree one folder deeper); no folder higher up is searched, so
+    what a machine keeps far above a checkout is never taken for its reference."""
     if directory:
         return Path(directory)
     env = os.environ.get(REFERENCE_ENV)
     if env:
         return Path(env) / name
-    for parent in ROOT.parents:
+    for parent in list(ROOT.parents)[:2]:
         cand = parent / "shared" / "reference" / name
         if cand.is_dir():
             return cand
