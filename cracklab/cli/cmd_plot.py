@@ -42,6 +42,19 @@ def _run_for_figures(ds, path, allow_partial, what):
     return ds
 
 
+def _refuse_damaged(store):
+    """Raise a StoreError naming ``store`` and the remedy when its listing shows damage (a missing
+    chunk or array would be drawn as a blank picture), as ``cracklab export`` does."""
+    from ..errors import StoreError
+    from ..output.verify import check_run
+
+    if "://" in store:
+        return
+    report = check_run(store, read=False)
+    if not report.ok:
+        raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+
+
 def _check_parameter(ds, option, name):
     """The coordinate name of the swept parameter ``name`` (--by, --x), or a clear error."""
     from ..ensemble import coordinate_name
@@ -86,7 +99,8 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
 
     Reads the store lazily (a frame at a time, thinned to the figure's size). An unfinished
     run or member is drawn up to its last complete snapshot, with a note; a failed one is
-    refused unless --allow-partial."""
+    refused unless --allow-partial; a damaged run store (a missing chunk or array) is
+    refused, naming the damage and the remedy (cracklab verify STORE)."""
     from pathlib import Path
 
     import xarray as xr
@@ -110,6 +124,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
     parent = Path(store.rstrip("/")).parent
     try:
         if not ens:
+            _refuse_damaged(store)
             ds = _run_for_figures(xr.open_zarr(store, consolidated=False), store, allow_partial, f"the run in {store}")
         elif member is not None or kind in ("snapshot", "rupture", "gif"):
             status = member_status(store)
