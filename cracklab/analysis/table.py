@@ -7,6 +7,7 @@ import os
 import numpy as np
 import xarray as xr
 
+from .faults import FAULT, fault_measures, is_fault
 from .fronts import front_position
 from .members import member_coords, over_members
 from .rupture import rupture_statistics, scene_dict
@@ -29,7 +30,8 @@ def measures(data) -> xr.Dataset:
     units = data["x1"].attrs.get("units", "1")
     tunits = data["rupture_time"].attrs.get("units", "1")
     values = dict.fromkeys(FRONT, np.nan)
-    if np.isfinite(t_end) and t_end > 0:
+    fault = is_fault(data)
+    if np.isfinite(t_end) and t_end > 0 and not fault:
         front = front_position(data, method="rupture_time", times=[0.75 * t_end, t_end])
         mean = front.mean("x3").values
         values = {"front_position": float(mean[-1]), "front_width": float(front.isel(t=-1).std("x3")),
@@ -37,6 +39,9 @@ def measures(data) -> xr.Dataset:
     speed = "1" if units == tunits == "1" else f"{units} {tunits}-1"
     for k, v in values.items():
         out[k] = ((), v, {"long_name": FRONT[k], "units": speed if k == "late_front_speed" else units})
+    faults = fault_measures(data) if fault else {k: (np.nan, {"long_name": FAULT[k][0]}) for k in FAULT}
+    for k, (v, attrs) in faults.items():
+        out[k] = ((), v, attrs)
     return out
 
 

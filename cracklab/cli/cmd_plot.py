@@ -8,7 +8,7 @@ import click
 from .common import CONTEXT, _interrupted, _note, _pick_member, fail, main
 
 
-PLOT_KINDS = ("all", "snapshot", "rupture", "length", "summary", "panels", "gif")
+PLOT_KINDS = ("all", "snapshot", "rupture", "length", "summary", "panels", "gif", "stations")
 
 
 def _run_for_figures(ds, path, allow_partial, what):
@@ -42,6 +42,19 @@ def _run_for_figures(ds, path, allow_partial, what):
     return ds
 
 
+def _refuse_damaged(store):
+    """Raise a StoreError naming ``store`` and the remedy when its listing shows damage (a missing
+    chunk or array would be drawn as a blank picture), as ``cracklab export`` does."""
+    from ..errors import StoreError
+    from ..output.verify import check_run
+
+    if "://" in store:
+        return
+    report = check_run(store, read=False)
+    if not report.ok:
+        raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+
+
 def _check_parameter(ds, option, name):
     """The coordinate name of the swept parameter ``name`` (--by, --x), or a clear error."""
     from ..ensemble import coordinate_name
@@ -73,7 +86,11 @@ def _check_time(ds, time_):
               help="Output file (one kind) or directory (--kind all); default next to STORE.")
 @click.option("--kind", type=click.Choice(PLOT_KINDS), default="all", show_default=True,
               help="snapshot: a field at one time; rupture: rupture-time contours; length: mean "
-                   "crack length vs t; summary / panels: ensemble figures; gif: animation.")
+                   "crack length vs t; summary / panels: ensemble figures; gif: animation; stations: "
+                   "station series of --field (default v_1) at every --station. A fault run's 'all' "
+                   "draws rupture-time contours, final slip and station slip rates.")
+@click.option("--station", "stations", multiple=True, help="Station to draw with --kind stations (repeat; "
+              "default: all).")
 @click.option("--field", default="delta_2", show_default=True, help="Field for snapshot and gif.")
 @click.option("--time", "time_", type=float, default=None, help="Snapshot time (default: the last).")
 @click.option("--member", default=None, help="Ensemble member id (or position) for run figures.")
@@ -81,12 +98,13 @@ def _check_time(ds, time_):
 @click.option("--x", "x_param", default=None, help="Ensemble parameter on the x axis of the summary.")
 @click.option("--allow-partial", is_flag=True,
               help="Draw a failed run or member too (what it recorded before it failed).")
-def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) -> None:
+def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, stations) -> None:
     """Figures of a run or of an ensemble STORE (PNG, or GIF for --kind gif).
 
     Reads the store lazily (a frame at a time, thinned to the figure's size). An unfinished
     run or member is drawn up to its last complete snapshot, with a note; a failed one is
-    refused unless --allow-partial."""
+    refused unless --allow-partial; a damaged run store (a missing chunk or array) is
+    refused, naming the damage and the remedy (cracklab verify STORE)."""
     from pathlib import Path
 
     import xarray as xr
@@ -110,8 +128,9 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
     parent = Path(store.rstrip("/")).parent
     try:
         if not ens:
+            _refuse_damaged(store)
             ds = _run_for_figures(xr.open_zarr(store, consolidated=False), store, allow_partial, f"the run in {store}")
-        elif member is not None or kind in ("snapshot", "rupture", "gif"):
+        elif member is not None or kind in ("snapshot", "rupture", "gif", "stations"):
             status = member_status(store)
             if member is None and len(status) != 1:
                 raise click.ClickException(f"--kind {kind} draws one member: give --member (an id, or a position "
@@ -142,6 +161,8 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
         raise fail(exc) from None
     if time_ is not None and kind in ("snapshot", "all"):
         _check_time(ds if "member" not in ds.dims else _member(ds, 0), time_)
+    if kind == "stations" and field == "delta_2":
+        field = "v_1"
     if field not in ds.data_vars and kind in ("snapshot", "gif"):
         recorded = [v for v in ds.data_vars if "t" in ds[v].dims]
         raise click.ClickException(f"--field {field}: not recorded in this result; recorded: "
@@ -168,6 +189,10 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial) 
                 P.ensemble_summary(ds, by=by, x=x_param, path=out)
             elif kind == "panels":
                 P.ensemble_panels(ds, path=out)
+            elif kind == "stations":
+                from ..plots.faults import station_series
+
+                station_series(ds, field, stations=stations, path=out)
             else:
                 P.animate(ds, out, field)
             paths = [out]

@@ -13,7 +13,11 @@ from .common import CONTEXT, main
 def summary(store, output) -> None:
     """The parameters and summary measures of every member of an ensemble STORE (or of a
     run), one row per member: swept parameters, status, final crack length and growth,
-    ruptured area, front position, width and speed, run time (cracklab.ensemble.summary)."""
+    ruptured area, front position, width and speed, run time (cracklab.ensemble.summary).
+
+    A fault run (a shear component active) gets rupture measures instead of the crack-front
+    ones: rupture area, mean slip and moment (NaN when slip is not recorded), peak slip rate
+    (station series and snapshots of v_1/v_3), first, median and last rupture time."""
     from ..analysis import summary as table_of
     from ..errors import InputError, StoreError
 

@@ -11,7 +11,8 @@ from .runs import rupture_contours, snapshot
 
 def summary_figures(ds, out, *, field="delta_2", by=None, x=None, gif_member=None, prefix=""):
     """Write the standard figures of a run or an ensemble into directory ``out``; returns
-    the list of paths. Run: snapshot, rupture contours, crack length, GIF. Ensemble:
+    the list of paths. Fault run (a shear component active): rupture-time contours, final
+    slip, station slip rate. Other run: snapshot, rupture contours, crack length, GIF. Ensemble:
     summary (crack length curves + final lengths), rupture-time panels and a GIF of
     ``gif_member`` (default: the first member)."""
     out = Path(out)
@@ -28,6 +29,12 @@ def summary_figures(ds, out, *, field="delta_2", by=None, x=None, gif_member=Non
             paths.append(out / f"{prefix}{field}_{str(d.member.values) if 'member' in d.coords else 'run'}.gif")
             animate(d, paths[-1], field)
         return paths
+    from ..analysis.faults import is_fault
+
+    if is_fault(ds):
+        from .faults import fault_figures
+
+        return fault_figures(ds, out, prefix)
     if field in ds and ds.sizes.get("t", 0) > 0:
         paths.append(out / f"{prefix}{field}.png")
         snapshot(ds, field, path=paths[-1])
