@@ -161,3 +161,15 @@ def test_no_two_modules_import_each_other():
     cycles = [sorted(c) for c in _cycles() if c not in PAIRS]
     assert not cycles, f"modules that import each other (directly or around a circle): {cycles}"
     assert all(pair in _cycles() for pair in PAIRS), "a listed cycle is gone: take it off PAIRS"
+
+
+def test_no_private_name_is_imported_from_another_module():
+    """A helper one module shares with another is public in it (no ``from .common import
+    _helper``): a leading underscore means "of this module only"."""
+    taken = []
+    for module, path in MODULES.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and (node.level or (node.module or "").startswith("cracklab")):
+                taken += [f"{path.relative_to(ROOT)}:{node.lineno} {a.name}" for a in node.names
+                          if a.name.startswith("_") and not a.name.startswith("__")]
+    assert not taken, taken

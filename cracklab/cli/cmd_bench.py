@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .common import CONTEXT, _interrupted, fail, main
+from .common import CONTEXT, exit_interrupted, fail, main
 
 
 BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3", "grid": "--n1/--n3", "law": "--law", "mode": "--mode",
@@ -70,7 +70,7 @@ def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law,
     except InputError as exc:
         raise fail(exc, BENCH_FLAGS) from None
     except KeyboardInterrupt:
-        _interrupted("interrupted; nothing was written")
+        exit_interrupted("interrupted; nothing was written")
     if output is not None:
         try:
             with open(output, "w") as fh:

@@ -5,7 +5,7 @@ import sys
 
 import click
 
-from .common import CONTEXT, _interrupted, fail, main
+from .common import CONTEXT, exit_interrupted, fail, main
 
 
 @main.command(context_settings=CONTEXT)
@@ -29,6 +29,6 @@ def demo(out: str, scheduler, workers, no_lamb) -> None:
     except InputError as exc:
         raise fail(exc, {"scheduler": "--scheduler"}) from None
     except KeyboardInterrupt:
-        _interrupted("interrupted; rerun the same command to resume (complete members are kept)")
+        exit_interrupted("interrupted; rerun the same command to resume (complete members are kept)")
     if ok is False:
         sys.exit(1)

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from .common import CONTEXT, _interrupted, _note, _pick_member, fail, main
+from .common import CONTEXT, exit_interrupted, print_note, pick_member, fail, main
 
 
 @main.command(context_settings=CONTEXT)
@@ -36,7 +36,7 @@ def export(store, output, netcdf, member, overwrite, allow_partial) -> None:
     try:
         ens = store_kind(store) == "ensemble"
         if member is not None and ens:
-            member = _pick_member(member_status(store), member, allow_partial)
+            member = pick_member(member_status(store), member, allow_partial)
         progress = run_progress(member_path(store, member) if member else store) if (member or not ens) else None
         out = export_netcdf(store, output, member=member, allow_partial=allow_partial, overwrite=overwrite)
     except (InputError, StoreError) as exc:
@@ -44,14 +44,14 @@ def export(store, output, netcdf, member, overwrite, allow_partial) -> None:
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"{flag}: cannot write {output}: {exc.strerror or exc}") from None
     except KeyboardInterrupt:
-        _interrupted("interrupted; nothing was written")
+        exit_interrupted("interrupted; nothing was written")
     if progress is not None and progress.status != "complete":
-        _note(f"{'member ' + member if member else store} is {progress.describe()}; exported "
+        print_note(f"{'member ' + member if member else store} is {progress.describe()}; exported "
               f"{progress.snapshots} snapshot{'s' if progress.snapshots != 1 else ''}")
     elif ens and member is None:
         left = [s["id"] for s in member_status(store) if not s["complete"]]
         if left:
-            _note(f"{len(left)} member{'s' if len(left) != 1 else ''} not complete "
+            print_note(f"{len(left)} member{'s' if len(left) != 1 else ''} not complete "
                   f"{'(failed ones included) ' if allow_partial else ''}left out: {', '.join(left[:4])}"
                   f"{', ...' if len(left) > 4 else ''}")
     click.echo(f"cracklab: wrote {out}")

@@ -5,7 +5,7 @@ import json
 
 import click
 
-from .common import CONTEXT, _interrupted, _note, _pick_member, fail, main
+from .common import CONTEXT, exit_interrupted, print_note, pick_member, fail, main
 
 
 PLOT_KINDS = ("all", "snapshot", "rupture", "length", "summary", "panels", "gif", "stations")
@@ -23,7 +23,7 @@ def _run_for_figures(ds, path, allow_partial, what):
         raise click.ClickException(f"{what} failed ({progress.error or 'no error recorded'}); its figures would show "
                                    f"a partial run: pass --allow-partial to draw what it recorded")
     if progress.status != "complete":
-        _note(f"{what} is {progress.describe()}; the figures show what exists")
+        print_note(f"{what} is {progress.describe()}; the figures show what exists")
         if "t" in ds.dims and progress.snapshots < ds.sizes["t"]:
             ds = ds.isel(t=slice(0, progress.snapshots))
         if "rupture_time" not in ds:
@@ -112,7 +112,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, 
     from .. import plots as P
     from ..ensemble import member_path, member_status, open_ensemble, open_member, store_kind
     from ..errors import InputError, StoreError
-    from ..plots.common import _member
+    from ..plots.common import member_of
 
     try:
         ens = store_kind(store) == "ensemble"
@@ -135,7 +135,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, 
             if member is None and len(status) != 1:
                 raise click.ClickException(f"--kind {kind} draws one member: give --member (an id, or a position "
                                            f"0 to {len(status) - 1})")
-            mid = _pick_member(status, member, allow_partial) if member is not None else status[0]["id"]
+            mid = pick_member(status, member, allow_partial) if member is not None else status[0]["id"]
             ds = _run_for_figures(open_member(store, mid), member_path(store, mid), allow_partial, f"member {mid}")
             ens = False
         else:
@@ -153,14 +153,14 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, 
                 x_param = _check_parameter(ds, "--x", x_param)
             if bad or unfinished:
                 parts = [f"{len(bad)} failed" if bad else "", f"{len(unfinished)} unfinished" if unfinished else ""]
-                _note(f"{store}: {' and '.join(p for p in parts if p)} of {len(status)} members "
+                print_note(f"{store}: {' and '.join(p for p in parts if p)} of {len(status)} members "
                       f"({', '.join((bad + unfinished)[:4])}{', ...' if len(bad + unfinished) > 4 else ''}); the "
                       f"figures show {shown} member{'s' if shown != 1 else ''}"
                       + ("" if allow_partial or not bad else "; --allow-partial adds what the failed ones recorded"))
     except (InputError, StoreError) as exc:
         raise fail(exc) from None
     if time_ is not None and kind in ("snapshot", "all"):
-        _check_time(ds if "member" not in ds.dims else _member(ds, 0), time_)
+        _check_time(ds if "member" not in ds.dims else member_of(ds, 0), time_)
     if kind == "stations" and field == "delta_2":
         field = "v_1"
     if field not in ds.data_vars and kind in ("snapshot", "gif"):
@@ -199,7 +199,7 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, 
     except (ValueError, KeyError) as exc:
         raise click.ClickException(str(exc)) from None
     except KeyboardInterrupt:
-        _interrupted("interrupted; the figure was not written")
+        exit_interrupted("interrupted; the figure was not written")
     if not paths:
         raise click.ClickException(f"nothing to draw in {store}")
     for p in paths:

@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .common import CONTEXT, _disk_line, _fmt_time, _interrupted, _load_scene, _note, fail, main
+from .common import CONTEXT, disk_line, fmt_time, exit_interrupted, load_scene, print_note, fail, main
 
 
 def _dry_run_scene(sc, source: str, output=None) -> bool:
@@ -35,13 +35,13 @@ def _dry_run_scene(sc, source: str, output=None) -> bool:
     click.echo(f"  memory    {est.describe()}; {fmt_bytes(avail)} {source_mem}: {verdict}")
     from ..output.disk import output_size
 
-    line, on_disk = _disk_line(output_size(sc), output)
+    line, on_disk = disk_line(output_size(sc), output)
     click.echo(line)
     if verdict != "fits":
         click.echo("  run time  not calibrated (the run does not fit in memory)")
         return False
     cal = calibrate(sc)
-    click.echo(f"  run time  about {_fmt_time(cal['setup_s'] + cal['run_s'])} ({cal['ms_per_step']:.3g} ms per "
+    click.echo(f"  run time  about {fmt_time(cal['setup_s'] + cal['run_s'])} ({cal['ms_per_step']:.3g} ms per "
                f"step over {cal['steps_timed']} timed steps, setup {cal['setup_s']:.2g} s)")
     return on_disk
 
@@ -59,8 +59,8 @@ def _outcome(sc, first, wall) -> str:
     """The line that ends a complete run: steps run, simulated time, wall time."""
     if first:
         return (f"complete: resumed from step {first}, ran steps {first + 1} to {sc.nsteps} ({_when(sc, first)} "
-                f"to {_when(sc, sc.nsteps)[4:]} simulated) in {_fmt_time(wall)} wall")
-    return (f"complete: ran {sc.nsteps} steps ({_when(sc, sc.nsteps)} simulated) in {_fmt_time(wall)} wall")
+                f"to {_when(sc, sc.nsteps)[4:]} simulated) in {fmt_time(wall)} wall")
+    return (f"complete: ran {sc.nsteps} steps ({_when(sc, sc.nsteps)} simulated) in {fmt_time(wall)} wall")
 
 
 def _scene_of(scene: str, sets, allow):
@@ -75,7 +75,7 @@ def _scene_of(scene: str, sets, allow):
         if sets:
             raise click.UsageError(f"--set is for a builder's arguments ({scene} is a file: edit it, or write "
                                    f"a new one with cracklab new)")
-        return _load_scene(scene, allow=allow)
+        return load_scene(scene, allow=allow)
     if scene in registered_builders():
         from .cmd_new import build
 
@@ -151,7 +151,7 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
             raise click.ClickException(f"--resume: {output} is a URL; runs into an object store have no "
                                        f"checkpoints to resume from: drop --resume, or write to a local path")
         resume = False
-        _note(f"{output} is a URL: the run is written there without checkpoints"
+        print_note(f"{output} is a URL: the run is written there without checkpoints"
               f"{' (--checkpoint-every ignored)' if checkpoint_every is not None else ''}, so an interrupted "
               f"run starts over; for a resumable run write to a local path and copy the store")
     try:
@@ -193,15 +193,15 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
         if any(issubclass(w.category, StoreWarning) for w in caught):
             done, first = False, 0              # a damaged store: the run was done again from the start
     except Interrupted as exc:
-        _interrupted(f"interrupted at step {exc.step}; {_when(sc, exc.step)} simulated of t_end = {sc.t_end:g}, "
-                     f"{_fmt_time(time.monotonic() - t0)} wall; rerun the same command to resume")
+        exit_interrupted(f"interrupted at step {exc.step}; {_when(sc, exc.step)} simulated of t_end = {sc.t_end:g}, "
+                     f"{fmt_time(time.monotonic() - t0)} wall; rerun the same command to resume")
     except KeyboardInterrupt:
         step = checkpoint.read_entry(path, "n") if path is not None else None
-        _interrupted(f"interrupted at step {step}; rerun the same command to resume" if step is not None else
+        exit_interrupted(f"interrupted at step {step}; rerun the same command to resume" if step is not None else
                      "interrupted before the first checkpoint; rerun the same command to start again")
     except SimulationError as exc:
         kept = f"; what was recorded up to it is kept in {output} (status failed)" if output else ""
-        raise click.ClickException(f"the run failed after {_fmt_time(time.monotonic() - t0)} wall: {exc}"
+        raise click.ClickException(f"the run failed after {fmt_time(time.monotonic() - t0)} wall: {exc}"
                                    f"{kept}") from None
     except (StoreError, InputError) as exc:
         raise fail(exc, RUN_FLAGS) from None
@@ -209,7 +209,7 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
         click.echo(f"cracklab: {output} holds this run, complete (checked); nothing to do (--no-resume computes "
                    f"it again)")
     else:
-        _note(_outcome(sc, first, time.monotonic() - t0))
+        print_note(_outcome(sc, first, time.monotonic() - t0))
         click.echo(f"cracklab: wrote {output}")
 
 

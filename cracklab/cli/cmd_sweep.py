@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from .common import CONTEXT, _disk_line, _fmt_time, _interrupted, _read_toml, fail, main
+from .common import CONTEXT, disk_line, fmt_time, exit_interrupted, load_toml, fail, main
 
 
 SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"}
@@ -62,7 +62,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
         except Exception as exc:  # noqa: BLE001 - reported as one clear line
             raise click.ClickException(f"--import: cannot import {module!r}: {type(exc).__name__}: {exc}") from None
     try:
-        _read_toml(study, "a study: [study], [base], [sweep], [[members]]")
+        load_toml(study, "a study: [study], [base], [sweep], [[members]]")
         spec = load_study(study, allow=allow)
         if dry_run:
             if not _dry_run_sweep(spec, study, output, workers, resume):
@@ -78,7 +78,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"store: cannot write {output}: {exc.strerror or exc}") from None
     except KeyboardInterrupt:
-        _interrupted(_sweep_interrupted(output))
+        exit_interrupted(_sweep_interrupted(output))
     click.echo(f"cracklab: {result.summary()}")
     if not result.ok:
         sys.exit(1)
@@ -142,7 +142,7 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     on_disk = True
     if sizes:
         label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
-        line, on_disk = _disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
+        line, on_disk = disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
         click.echo(line)
     if verdict != "fits":
         return False
@@ -158,7 +158,7 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     cal = calibrate(build_scene(spec.base, by_id[big].params))
     per = {mid: cal["setup_s"] + cal["run_s"] * cost(mid) / cost(big) for mid in known}
     wall = max(max(per.values()), sum(per.values()) / n)
-    click.echo(f"  run time  about {_fmt_time(wall)} on {n} worker{'s' if n > 1 else ''} ({_fmt_time(sum(per.values()))} "
+    click.echo(f"  run time  about {fmt_time(wall)} on {n} worker{'s' if n > 1 else ''} ({fmt_time(sum(per.values()))} "
                f"of member runs; the largest timed: {cal['ms_per_step']:.3g} ms per step over {cal['steps_timed']} "
                f"steps)")
     return on_disk

@@ -37,12 +37,12 @@ def fail(exc, flags: dict | None = None):
     return click.ClickException(text)
 
 
-def _interrupted(line: str):
+def exit_interrupted(line: str):
     click.echo(f"cracklab: {line}", err=True)
     sys.exit(INTERRUPTED)
 
 
-def _read_toml(path: str, what: str) -> dict:
+def load_toml(path: str, what: str) -> dict:
     """The tables of a TOML input file: one InputError for a binary file, malformed TOML or
     an empty file (``what``: "a scene", "a study")."""
     from ..errors import InputError
@@ -54,7 +54,7 @@ def _read_toml(path: str, what: str) -> dict:
     return data
 
 
-def _load_scene(path: str, allow=()):
+def load_scene(path: str, allow=()):
     """The scene of a TOML file (its field files read from its folder and below, or the
     ``allow`` folders) or of the store of an earlier run."""
     from ..errors import InputError
@@ -64,7 +64,7 @@ def _load_scene(path: str, allow=()):
 
         from ..model.scene_io import scene_from_data
 
-        data = _read_toml(path, "a scene: [material], [grid], [law], [loading], t_end")
+        data = load_toml(path, "a scene: [material], [grid], [law], [loading], t_end")
         return scene_from_data(data, base=Path(path).absolute().parent, allow=allow)  # references relative to it
     import xarray as xr
 
@@ -85,7 +85,7 @@ def _load_scene(path: str, allow=()):
     return scene_of(ds)
 
 
-def _fmt_time(seconds: float) -> str:
+def fmt_time(seconds: float) -> str:
     if seconds < 90:
         return f"{seconds:.3g} s"
     if seconds < 5400:
@@ -93,7 +93,7 @@ def _fmt_time(seconds: float) -> str:
     return f"{seconds / 3600:.3g} h"
 
 
-def _disk_line(estimate, output, what: str = "the run", reuse: bool = True, label: str = "output") -> tuple[str, bool]:
+def disk_line(estimate, output, what: str = "the run", reuse: bool = True, label: str = "output") -> tuple[str, bool]:
     """(the dry run's line on the output's size and the free disk space, whether it fits);
     ``output``: the store (None: the current directory); ``label``: what writes it."""
     from ..errors import DiskBudgetError
@@ -115,11 +115,11 @@ def _disk_line(estimate, output, what: str = "the run", reuse: bool = True, labe
     return head + f"{fmt_bytes(room)} {where_text}: fits", True
 
 
-def _note(text: str):
+def print_note(text: str):
     click.echo(f"cracklab: {text}", err=True)
 
 
-def _pick_member(status, member, allow_partial):
+def pick_member(status, member, allow_partial):
     """The member id for --member (an id, or a position among the members in plan order)."""
     ids = [s["id"] for s in status]
     if member in ids:

@@ -5,8 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .common import (GIF_FRAMES, GIF_NODES, _cmap_for, _is_plane, _label, _limits, _member, _plane_image, _plt,
-                     _robust, _thin)
+from .common import (GIF_FRAMES, GIF_NODES, cmap_for, is_plane, field_label, colour_limits, member_of, plane_image, get_pyplot,
+                     robust_range, thin_out)
 
 
 def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None, robust=True):
@@ -17,10 +17,10 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
     PillowWriter does, so that a GIF of a few dozen frames takes about a second. Frames
     are read one at a time, at most ``GIF_FRAMES`` of them on at most ``GIF_NODES`` nodes
     per axis (bounded memory on any store)."""
-    plt = _plt()
+    plt = get_pyplot()
     from PIL import Image
 
-    d = _thin(_member(ds, member), GIF_NODES)
+    d = thin_out(member_of(ds, member), GIF_NODES)
     if field not in d or "t" not in d[field].dims or d.sizes["t"] == 0:
         raise ValueError(f"no snapshots of {field!r} to animate")
     if d.sizes["t"] > GIF_FRAMES:       # every k-th snapshot, the last one kept
@@ -30,23 +30,23 @@ def animate(ds, path, field="delta_2", *, member=None, fps=6, dpi=80, cmap=None,
     # the colour (or y) range from a few frames, then one frame read at a time
     sample = np.asarray(da.isel(t=np.unique(np.linspace(0, da.sizes["t"] - 1, 12).round().astype(int))).values)
     if robust:
-        vmin, vmax = _limits(sample, field, True, 1.0, 99.5)
+        vmin, vmax = colour_limits(sample, field, True, 1.0, 99.5)
     else:
-        vmin, vmax = _robust(sample, 0.0, 100.0)
+        vmin, vmax = robust_range(sample, 0.0, 100.0)
     del sample
-    plane = _is_plane(d)
+    plane = is_plane(d)
     fig, ax = plt.subplots(figsize=(6.4, 3.6), dpi=dpi, layout="constrained")
     first = np.asarray(da.isel(t=0).values)
     if plane:               # the plane problem: the field is a line along x1
         (artist,) = ax.plot(d["x1"].values, first[:, 0], color="C0", lw=1.5)
         pad = 0.05 * (vmax - vmin)
         ax.set_ylim(vmin - pad, vmax + pad)
-        ax.set_xlabel(_label(d, "x1"))
-        ax.set_ylabel(_label(d, field))
+        ax.set_xlabel(field_label(d, "x1"))
+        ax.set_ylabel(field_label(d, field))
         ax.grid(alpha=0.3)
     else:
-        artist = _plane_image(ax, d, first, cmap=cmap or _cmap_for(field), vmin=vmin, vmax=vmax)
-        fig.colorbar(artist, ax=ax, label=_label(d, field), shrink=0.9)
+        artist = plane_image(ax, d, first, cmap=cmap or cmap_for(field), vmin=vmin, vmax=vmax)
+        fig.colorbar(artist, ax=ax, label=field_label(d, field), shrink=0.9)
     t = da["t"].values
     name = da.attrs.get("long_name", field)
     title = ax.set_title(f"{name}, t = {t[-1]:.3g}")

@@ -12,7 +12,7 @@ from ..analysis.members import trim_padding
 from ..analysis.rupture import member_scenes, scene_dict
 
 
-def _plt():
+def get_pyplot():
     import matplotlib.pyplot as plt   # headless: matplotlib falls back to Agg by itself
 
     return plt
@@ -23,7 +23,7 @@ def plural(n: int, word: str) -> str:
     return f"{n} {word}" if n == 1 else f"{n} {word}s"
 
 
-def _member(ds, member=None):
+def member_of(ds, member=None):
     """One member of an ensemble Dataset as a run (the Dataset itself for a run)."""
     if "member" not in ds.dims:
         return ds
@@ -74,7 +74,7 @@ def parameter_label(ds, name, *, units=True) -> str:
     return f"{text} [{u}]" if units and u and u != "1" else text
 
 
-def _label(ds, name):
+def field_label(ds, name):
     """"long name [units]" of a variable or coordinate (its name without a long name)."""
     var = ds[name]
     long_name = var.attrs.get("long_name", name)
@@ -82,28 +82,28 @@ def _label(ds, name):
     return f"{long_name} [{units}]" if units and units != "1" else long_name
 
 
-def _finish(fig, path):
+def finish_figure(fig, path):
     if path is not None:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         fig.savefig(path, dpi=fig.dpi)
-        _plt().close(fig)
+        get_pyplot().close(fig)
     return fig
 
 
-def _axes(ax, figsize=(7.0, 3.8)):
-    plt = _plt()
+def new_axes(ax, figsize=(7.0, 3.8)):
+    plt = get_pyplot()
     if ax is None:
         fig, ax = plt.subplots(figsize=figsize, dpi=110, layout="constrained")
         return fig, ax
     return ax.figure, ax
 
 
-def _extent(ds):
+def plane_extent(ds):
     return ds["x1"].values, ds["x3"].values
 
 
-def _is_plane(ds) -> bool:
+def is_plane(ds) -> bool:
     """The plane problem (n3 = 1): fields are lines along x1."""
     return ds.sizes.get("x3", 0) == 1
 
@@ -115,24 +115,24 @@ MAX_NODES = 1024
 GIF_NODES, GIF_FRAMES = 400, 200
 
 
-def _thin(ds, nodes=MAX_NODES):
+def thin_out(ds, nodes=MAX_NODES):
     """``ds`` (lazily) every k-th node along x1 and x3, k such that at most ``nodes`` remain."""
     steps = {d: int(math.ceil(ds.sizes[d] / nodes)) for d in ("x1", "x3") if ds.sizes.get(d, 0) > nodes}
     return ds.isel({d: slice(None, None, k) for d, k in steps.items()}) if steps else ds
 
 
-def _plane_image(ax, ds, values, *, cmap, vmin=None, vmax=None, norm=None):
+def plane_image(ax, ds, values, *, cmap, vmin=None, vmax=None, norm=None):
     """pcolormesh of an (x1, x3) array with x1 across, x3 up, equal aspect (3D grids)."""
-    x1, x3 = _extent(ds)
+    x1, x3 = plane_extent(ds)
     mesh = ax.pcolormesh(x1, x3, np.asarray(values).T, cmap=cmap, vmin=vmin, vmax=vmax, norm=norm,
                          shading="nearest", rasterized=True)
     ax.set_aspect("equal")
-    ax.set_xlabel(_label(ds, "x1"))
-    ax.set_ylabel(_label(ds, "x3"))
+    ax.set_xlabel(field_label(ds, "x1"))
+    ax.set_ylabel(field_label(ds, "x3"))
     return mesh
 
 
-def _robust(values, lo=2.0, hi=98.0):
+def robust_range(values, lo=2.0, hi=98.0):
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
@@ -143,16 +143,16 @@ def _robust(values, lo=2.0, hi=98.0):
     return float(a), float(b)
 
 
-def _cmap_for(field):
+def cmap_for(field):
     return "RdBu_r" if field.startswith(("tau", "v_")) else "viridis"
 
 
-def _limits(values, field, robust, lo=2.0, hi=98.0):
+def colour_limits(values, field, robust, lo=2.0, hi=98.0):
     """Colour (or y) limits of a field: percentiles with ``robust``, symmetric about 0 for
     tractions and rates; None, None otherwise (the data's own range)."""
     if not robust:
         return None, None
-    vmin, vmax = _robust(values, lo, hi)
+    vmin, vmax = robust_range(values, lo, hi)
     if field.startswith(("tau", "v_")):
         m = max(abs(vmin), abs(vmax))
         vmin, vmax = -m, m

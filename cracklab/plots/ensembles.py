@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ..analysis import crack_length
-from .common import _axes, _finish, _label, _member, _plt, parameter_label
+from .common import new_axes, finish_figure, field_label, member_of, get_pyplot, parameter_label
 from .runs import FAILED_EDGE, rupture_contours
 
 
@@ -77,7 +77,7 @@ def _pick_by(cands, by):
 def _colours(values, cmap="viridis"):
     """(colour of each value (None where NaN), legend entries or None, norm or None):
     a few distinct values get discrete colours and a legend, many a colour bar."""
-    plt = _plt()
+    plt = get_pyplot()
     from matplotlib.colors import ListedColormap
 
     base = plt.get_cmap(cmap)
@@ -100,12 +100,12 @@ def crack_length_plot(ds, *, by=None, style=None, ax=None, path=None, cmap="viri
     members without ``by`` in grey, dashed."""
     from matplotlib.lines import Line2D
 
-    fig, ax = _axes(ax)
+    fig, ax = new_axes(ax)
     L = crack_length(ds)
     if "member" not in L.dims:
         ax.plot(L.t, L, "k-")
     else:
-        plt = _plt()
+        plt = get_pyplot()
         cands = _default_by(ds)
         by = _pick_by(cands, by)
         if style is None:
@@ -135,14 +135,14 @@ def crack_length_plot(ds, *, by=None, style=None, ax=None, path=None, cmap="viri
     ax.set_ylabel(_da_label(L))
     ax.set_title(title or "mean crack length")
     ax.grid(alpha=0.3)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def ensemble_summary(ens, *, by=None, x=None, path=None, title=None):
     """Two panels: crack length against time per member coloured by ``by``; the final
     crack length against ``x`` with one line per value of ``by`` (members lacking ``x``
     or ``by`` are drawn as grey dashed levels). Defaults: the product axes of the sweep."""
-    plt = _plt()
+    plt = get_pyplot()
     cands = _default_by(ens)
     by = _pick_by(cands, by)
     if x is None:
@@ -174,7 +174,7 @@ def ensemble_summary(ens, *, by=None, x=None, path=None, title=None):
     a1.grid(alpha=0.3)
     if title:
         fig.suptitle(title)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
@@ -182,12 +182,12 @@ def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
     the edge of the ruptured region in black (said in a legend)."""
     from matplotlib.lines import Line2D
 
-    plt = _plt()
+    plt = get_pyplot()
     n = ens.sizes["member"]
     if ncols is None:
         ncols = 2 if n <= 4 else 3 if n <= 9 else 4
     nrows = math.ceil(n / ncols)
-    d0 = _member(ens, 0)
+    d0 = member_of(ens, 0)
     aspect = (float(d0.x1[-1] - d0.x1[0]) / max(float(d0.x3[-1] - d0.x3[0]), 1e-12)) if d0.sizes["x3"] > 1 else 3
     w = 4.2
     fig, axes = plt.subplots(nrows, ncols, figsize=(w * ncols, w / aspect * nrows + 0.6 * nrows),
@@ -211,10 +211,10 @@ def ensemble_panels(ens, *, path=None, ncols=None, levels=8, title=None):
 
     cmap = ListedColormap(plt.get_cmap("plasma")(np.linspace(0.0, 0.85, 256)))
     sm = plt.cm.ScalarMappable(norm=plt.Normalize(0.0, float(np.max(levels))), cmap=cmap)
-    fig.colorbar(sm, ax=axes, label=_label(ens, "rupture_time") + " (contours)", shrink=0.6, aspect=30)
+    fig.colorbar(sm, ax=axes, label=field_label(ens, "rupture_time") + " (contours)", shrink=0.6, aspect=30)
     if d0.sizes["x3"] > 1:
         fig.legend(handles=[Line2D([], [], color="k", lw=1.4, label=f"black: {FAILED_EDGE}")],
                    loc="outside lower center", fontsize=8, frameon=False)
     if title:
         fig.suptitle(title)
-    return _finish(fig, path)
+    return finish_figure(fig, path)

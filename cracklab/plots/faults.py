@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import _axes, _finish, _plane_image
+from .common import new_axes, finish_figure, plane_image
 
 
 def station_series(ds, field="v_1", *, stations=None, ax=None, path=None):
@@ -17,7 +17,7 @@ def station_series(ds, field="v_1", *, stations=None, ax=None, path=None):
     unknown = [s for s in chosen if s not in known]
     if unknown:
         raise ValueError(f"--station {unknown[0]}: no such station; choose among: {', '.join(known)}")
-    fig, ax = _axes(ax)
+    fig, ax = new_axes(ax)
     t = ds["t_station"].values
     for s in chosen:
         ax.plot(t, np.asarray(ds[name].sel(station=s).values), label=s, lw=1.0)
@@ -25,7 +25,7 @@ def station_series(ds, field="v_1", *, stations=None, ax=None, path=None):
     ax.set_ylabel(f"{field} ({ds[name].attrs.get('units', '1')})")
     if len(chosen) <= 16:
         ax.legend(fontsize=6, ncol=2)
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def final_slip(ds, *, ax=None, path=None):
@@ -33,11 +33,11 @@ def final_slip(ds, *, ax=None, path=None):
     parts = [np.asarray(ds[n].isel(t=-1).values, dtype=float) for n in ("delta_1", "delta_3") if n in ds]
     if not parts or ds.sizes.get("t", 0) == 0:
         raise ValueError("no slip recorded (delta_1/delta_3 snapshots)")
-    fig, ax = _axes(ax)
-    mesh = _plane_image(ax, ds, np.sqrt(sum(p ** 2 for p in parts)), cmap="viridis")
+    fig, ax = new_axes(ax)
+    mesh = plane_image(ax, ds, np.sqrt(sum(p ** 2 for p in parts)), cmap="viridis")
     fig.colorbar(mesh, ax=ax, label="final slip")
     ax.set_title("final slip")
-    return _finish(fig, path)
+    return finish_figure(fig, path)
 
 
 def fault_figures(ds, out, prefix=""):

@@ -4,7 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .animation import animate
-from .common import _member
+from .common import member_of
 from .ensembles import crack_length_plot, ensemble_panels, ensemble_summary
 from .runs import rupture_contours, snapshot
 
@@ -24,7 +24,7 @@ def summary_figures(ds, out, *, field="delta_2", by=None, x=None, gif_member=Non
         paths.append(out / f"{prefix}rupture_panels.png")
         ensemble_panels(ds, path=paths[-1])
         member = 0 if gif_member is None else gif_member
-        d = _member(ds, member)
+        d = member_of(ds, member)
         if field in d and d.sizes.get("t", 0) > 1:
             paths.append(out / f"{prefix}{field}_{str(d.member.values) if 'member' in d.coords else 'run'}.gif")
             animate(d, paths[-1], field)

@@ -27,7 +27,7 @@ def _warn(message: str) -> None:
     warnings.warn(BuilderWarning(message), stacklevel=level)
 
 
-def _require(name, ok, message):
+def require(name, ok, message):
     if not ok:
         raise InputError(name, message)
 
@@ -107,7 +107,7 @@ def spacing_grid(builder, dx, domain, *, free_surface=False, unit="m", holds=Non
                                f"{offered}); {str(err)[len('dx: '):]}") from None
     if holds is not None and not holds(L1, L3, dx):
         # a domain that holds the fault at a finer spacing: dx is what is too large
-        _require("domain", holds(L1, L3, min(L1, L3) * 1e-6), f"{needs}, got {domain!r}")
+        require("domain", holds(L1, L3, min(L1, L3) * 1e-6), f"{needs}, got {domain!r}")
         raise InputError("dx", f"is too coarse for {builder}: on a grid of dx = {dx:g} the domain {L1:g} x {L3:g} "
                                f"{unit} would not {needs.removeprefix('must ')}; nearest accepted: "
                                f"{_spacings_text(accepted_spacings(L1, L3, dx, holds))}")

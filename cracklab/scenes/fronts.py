@@ -11,7 +11,7 @@ from ..model.grid import Grid
 from ..model.loading import Loading
 from ..model.record import Record
 from ..model.scene import Numerics, Scene
-from .common import UNIT, _require
+from .common import UNIT, require
 
 
 def cohesive_zone_size(material, tau_c, delta_c):
@@ -44,10 +44,10 @@ def _crack_setup(*, Z, n1, n3, tau_c, delta_c, cohesive_zone, g0_ratio, l0, barr
     l0 = 0.25 * Z if l0 is None else check_positive("l0", l0)
     width = 0.25 * Z if barrier_width is None else check_positive("barrier_width", barrier_width)
     back = l0 if symmetric else 0.0          # length of crack behind x1 = 0
-    _require("barrier_width", width >= grid.dx1,
+    require("barrier_width", width >= grid.dx1,
              f"must be at least one cell (dx1 = {grid.dx1:g}), got {width:g}")
     room = 2.0 * Z - width - back - grid.dx1
-    _require("l0", grid.dx1 <= l0 <= room,
+    require("l0", grid.dx1 <= l0 <= room,
              f"must be in [dx1, 2Z - barrier_width - back - dx1] = [{grid.dx1:g}, {room:g}], got {l0:g}")
     g0_ratio = check_positive("g0_ratio", g0_ratio)
     eps = 1e-9 * grid.dx1
@@ -66,7 +66,7 @@ def _constant_K_load(mat, G0, l0, l_ref):
 
 
 def _check_load(tau0, tau_c_min):
-    _require("g0_ratio", tau0 < tau_c_min,
+    require("g0_ratio", tau0 < tau_c_min,
              f"gives a load tau0 = {tau0:g} >= the weakest strength {tau_c_min:g}, which breaks the whole "
              f"plane at once; use a smaller g0_ratio or cohesive_zone (tau0 grows with sqrt(delta_c / l0))")
 
@@ -100,16 +100,16 @@ def asperity_row(*, Z=1.0, n1=512, n3=256, beta=None, t_end=3.0, tau_c=1.0, delt
     contrast = check_positive("contrast", contrast)
     strength = tau_c
     if asperities and contrast != 1.0:
-        _require("asperities", not grid.plane, "need a 3D grid (n3 > 1); use asperities=False with n3 = 1")
+        require("asperities", not grid.plane, "need a 3D grid (n3 > 1); use asperities=False with n3 = 1")
         d = Z / 8.0 if diameter is None else check_positive("diameter", diameter)
         if centres is None:
-            _require("n_asperities", isinstance(n_asperities, (int, np.integer)) and n_asperities >= 1,
+            require("n_asperities", isinstance(n_asperities, (int, np.integer)) and n_asperities >= 1,
                      f"must be an integer >= 1, got {n_asperities!r}")
             xa = check_positive("x1_asperity", x1_asperity) * Z
             centres = [(xa, (k + 0.5) * Z / n_asperities) for k in range(int(n_asperities))]
         mask = asperity_mask(grid, centres, d)
-        _require("centres", np.any(mask), "no grid node falls inside an asperity")
-        _require("centres", not np.any(mask & (crack | barrier)),
+        require("centres", np.any(mask), "no grid node falls inside an asperity")
+        require("centres", not np.any(mask & (crack | barrier)),
                  "asperities must not overlap the initial crack or the barrier")
         strength = np.where(mask, contrast * tau_c, tau_c)
     Gc = 0.5 * tau_c * delta_c
@@ -146,8 +146,8 @@ def random_field(grid, *, correlation_length, covariance="gaussian", seed=0):
     ("gaussian") or exp(-r/l) ("exponential"); either way the correlation falls to 1/e
     at r = l = ``correlation_length``. Same seed, same field."""
     ell = check_positive("correlation_length", correlation_length)
-    _require("covariance", covariance in COVARIANCES, f"must be one of {COVARIANCES}, got {covariance!r}")
-    _require("seed", isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0,
+    require("covariance", covariance in COVARIANCES, f"must be one of {COVARIANCES}, got {covariance!r}")
+    require("seed", isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0,
              f"must be an integer >= 0, got {seed!r}")
     d1 = np.minimum(grid.x1, grid.L1 - grid.x1)
     d3 = np.minimum(grid.x3, grid.L3 - grid.x3) if not grid.plane else np.zeros(1)
@@ -158,7 +158,7 @@ def random_field(grid, *, correlation_length, covariance="gaussian", seed=0):
     g = np.fft.ifft2(np.fft.fft2(white) * np.sqrt(spectrum)).real
     g -= g.mean()
     std = g.std()
-    _require("correlation_length", std > 0, f"is too long for the domain, got {ell:g}")
+    require("correlation_length", std > 0, f"is too long for the domain, got {ell:g}")
     return g / std
 
 
@@ -168,7 +168,7 @@ def _shape_field(g, mean, cov, distribution):
         return np.full(g.shape, float(mean))
     if distribution == "normal":
         out = mean * (1.0 + cov * g)
-        _require("cov", out.min() > 0, f"with distribution='normal' the field reaches {out.min():g} <= 0; "
+        require("cov", out.min() > 0, f"with distribution='normal' the field reaches {out.min():g} <= 0; "
                                        f"use a smaller cov or distribution='lognormal'")
         return out
     from scipy.optimize import brentq
@@ -180,7 +180,7 @@ def _shape_field(g, mean, cov, distribution):
     hi = np.sqrt(np.log1p(cov**2))
     while cv(hi) < 0:
         hi *= 2.0
-        _require("cov", hi < 1e3, f"is out of reach for this sample, got {cov:g}")
+        require("cov", hi < 1e3, f"is out of reach for this sample, got {cov:g}")
     s = brentq(cv, 0.0, hi, xtol=1e-14, rtol=1e-15)
     e = np.exp(s * (g - g.max()))
     return e * (mean / e.mean())
@@ -205,8 +205,8 @@ def random_toughness(*, Z=1.0, n1=512, n3=256, beta=None, t_end=3.0, tau_c=1.0, 
     mat, grid, tau_c, delta_c, l0, l_ref, crack, barrier, g0_ratio = _crack_setup(
         Z=Z, n1=n1, n3=n3, tau_c=tau_c, delta_c=delta_c, cohesive_zone=cohesive_zone,
         g0_ratio=g0_ratio, l0=l0, barrier_width=barrier_width, symmetric=symmetric, material=material)
-    _require("quantity", quantity in ("tau_c", "Gc"), f"must be 'tau_c' or 'Gc', got {quantity!r}")
-    _require("distribution", distribution in DISTRIBUTIONS, f"must be one of {DISTRIBUTIONS}, got {distribution!r}")
+    require("quantity", quantity in ("tau_c", "Gc"), f"must be 'tau_c' or 'Gc', got {quantity!r}")
+    require("distribution", distribution in DISTRIBUTIONS, f"must be one of {DISTRIBUTIONS}, got {distribution!r}")
     cov = check_positive("cov", cov, allow_zero=True)
     ell = float(Z) / 16.0 if correlation_length is None else correlation_length
     g = random_field(grid, correlation_length=ell, covariance=covariance, seed=seed)
