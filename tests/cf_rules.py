@@ -33,7 +33,7 @@ import re
 
 import numpy as np
 
-from cracklab.model.units import parse as _unit
+from cracklab.model.units import parse as parse_unit
 
 #: standard names the exports may use, with their canonical units in the CF standard-name
 #: table; a name not listed here is reported, so that using one means adding it
@@ -79,7 +79,7 @@ def _variable(nc, name, var, attrs):
     units = attrs.get("units")
     u = None
     if units is not None:
-        u = _unit(units)
+        u = parse_unit(units)
         if not isinstance(units, str):
             yield "3.1", f"units {units!r} is not a string"
         elif u is None:

@@ -14,6 +14,7 @@ from cracklab.cli import main
 from cracklab.output import disk
 
 from cli_process import cli, error_line
+from field_scene import GRID, toml
 from interrupt import interrupted_run
 
 
@@ -51,28 +52,11 @@ def test_run_says_how_it_ended_on_stderr(tmp_path, monkeypatch):
 
 
 # ---------------------------------------------------------------------------- field files elsewhere
-FIELD_SCENE = """
-t_end = 0.05
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-[grid]
-n1 = 16
-n3 = 8
-L1 = 2.0
-L3 = 1.0
-[loading]
-tau0_2 = 0.5
-[law]
-kind = "linear_cohesive"
-delta_c = 0.01
-tau_c = { file = "../data/tau.nc", var = "tau_c" }
-"""
+FIELD_SCENE = toml('tau_c = { file = "../data/tau.nc", var = "tau_c" }')
 
 
 def test_allow_files_lets_run_and_sweep_read_a_field_from_another_folder(tmp_path):
-    grid = cracklab.Grid(n1=16, n3=8, L1=2.0, L3=1.0)
+    grid = GRID
     (tmp_path / "data").mkdir()
     (tmp_path / "case").mkdir()
     tau = 1.0 + np.arange(grid.n1 * grid.n3, dtype=float).reshape(grid.shape) / 100

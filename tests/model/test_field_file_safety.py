@@ -13,38 +13,17 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cracklab import Grid, InputError, Record, Scene, simulate
+from cracklab import InputError, Record, Scene, simulate
+from field_scene import GRID, toml
 
-GRID = Grid(n1=16, n3=8, L1=2.0, L3=1.0)
 TAU_C = 1.0 + np.random.default_rng(3).random(GRID.shape)
 
-HEAD = """\
-t_end = 0.05
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 8
-L1 = 2.0
-L3 = 1.0
-
-[loading]
-tau0_2 = 0.5
-
-[law]
-kind = "linear_cohesive"
-delta_c = 0.01
-"""
 
 
 def scene_file(folder, ref):
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / "scene.toml"
-    path.write_text(HEAD + f"tau_c = {ref}\n")
+    path.write_text(toml(f"tau_c = {ref}"))
     return path
 
 

@@ -12,34 +12,13 @@ import xarray as xr
 from cracklab import (Grid, InputError, LinearCohesive, Loading, Material, Record, Scene, scene_of, scenes,
                       simulate)
 from cracklab.model.scene_io import scene_to_toml, scenes_equal
+from field_scene import GRID, HEAD, toml
 
-GRID = Grid(n1=16, n3=8, L1=2.0, L3=1.0)
 RNG = np.random.default_rng(7)
 TAU_C = 1.0 + RNG.random(GRID.shape)
 CRACK = np.zeros(GRID.shape, bool)
 CRACK[:3] = True
 
-HEAD = """\
-t_end = 0.05
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 8
-L1 = 2.0
-L3 = 1.0
-
-[loading]
-tau0_2 = 0.5
-"""
-
-
-def toml(law: str, head: str = HEAD) -> str:
-    return head + "\n[law]\nkind = \"linear_cohesive\"\ndelta_c = 0.01\n" + law + "\n"
 
 
 def field_dataset(values=TAU_C, x1=None, x3=None, dims=("x1", "x3"), name="tau_c"):

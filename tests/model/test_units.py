@@ -7,29 +7,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from cracklab import Grid, InputError, Scene, scenes
+from cracklab import InputError, Scene, scenes
 from cracklab.model.scene_io import scenes_equal
+from field_scene import GRID, HEAD
 
-GRID = Grid(n1=16, n3=8, L1=2.0, L3=1.0)
 TAU_C = 1.0 + np.random.default_rng(3).random(GRID.shape)
 
-HEAD = """\
-t_end = 0.05
-
-[material]
-mu = 1.0
-cs = 1.0
-nu = 0.25
-
-[grid]
-n1 = 16
-n3 = 8
-L1 = 2.0
-L3 = 1.0
-
-[loading]
-tau0_2 = 0.5
-"""
 
 
 def scene_toml(tmp_path, units=None, law='tau_c = { file = "f.nc", var = "v" }\ndelta_c = 0.01'):
