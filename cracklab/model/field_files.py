@@ -112,11 +112,12 @@ def _check_place(field, name, path, roots, base):
     real = path.resolve()
     if not _inside(real, roots):
         raise InputError(field, _outside_message(name, real, roots, base))
-    kind = _kind_of(os.stat(real).st_mode)
+    mode = os.stat(real).st_mode
+    kind = _kind_of(mode)
     if kind is not None:
         raise InputError(field, f"file {name!r} is {kind}: a field is read only from a regular file (or a "
                                 f"Zarr directory of them)")
-    if stat.S_ISDIR(os.stat(real).st_mode):
+    if stat.S_ISDIR(mode):
         count = 0
         for top, dirs, files in os.walk(real):
             for entry in dirs + files:

@@ -3,7 +3,7 @@
 ``output_size(scene)`` bounds the bytes a run writes into its Zarr store from the scene
 alone: the snapshots of the recorded fields (float64 on the recorded region), the station
 series, the rupture times, the scene's input fields and the coordinates, each chunk as
-zstd writes it at worst (its input plus 1/128 and a frame header: zstd's own bound, since
+zstd writes it at worst (its input plus 1/256 and a frame header: zstd's own bound, since
 data that does not compress is stored raw) with its crc32c checksum, in a file of its own
 that takes whole blocks of the file system. Fields compress, often several times (a
 crack's opening is zero ahead of its front), but by how much depends on the run: the
@@ -27,6 +27,14 @@ BLOCK = 4096
 META = 8192
 #: the snapshots of one chunk hold at most this many bytes (output/simulate.py, Recorder.create)
 CHUNK_BYTES = 8 << 20
+#: snapshots a run keeps before it writes them (Recorder's flush_every)
+FLUSH = 8
+
+
+def snapshots_per_chunk(n1: int, n3: int, flush_every: int = FLUSH) -> int:
+    """Snapshots of one chunk of a recorded field on n1 x n3 nodes: at most ``flush_every``
+    (what a write holds) and at most ``CHUNK_BYTES`` of float64, at least one."""
+    return max(1, min(flush_every, CHUNK_BYTES // max(1, 8 * n1 * n3)))
 
 
 def _zstd_bound(n: int) -> int:
@@ -62,7 +70,7 @@ def output_size(scene) -> OutputEstimate:
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
     nsnap = rec.snapshot_count(scene.nsteps, scene.dt) if rec.fields else 0
     frame = 8 * n1r * n3r
-    per_chunk = max(1, min(8, CHUNK_BYTES // max(1, frame)))     # snapshots per chunk (Recorder.create)
+    per_chunk = snapshots_per_chunk(n1r, n3r)
     full, rest = divmod(nsnap, per_chunk)
     field = full * _on_disk(per_chunk * frame) + (_on_disk(rest * frame) if rest else 0)
     raw = nsnap * frame * len(rec.fields)

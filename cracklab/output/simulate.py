@@ -9,6 +9,7 @@ import xarray as xr
 
 from ..version import __version__
 from . import checkpoint
+from .disk import FLUSH, check_disk as holds, output_size, snapshots_per_chunk
 from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
 from ..model.record import face_field
 from ..model.scene_io import scene_from_data, scene_to_json
@@ -74,7 +75,7 @@ class Recorder:
     chunk is a sign of damage (``cracklab.output.verify``). ``path`` is the store's local path
     (None for store objects and URLs: no checkpoints)."""
 
-    def __init__(self, scene, store, path=None, flush_every=8):
+    def __init__(self, scene, store, path=None, flush_every=FLUSH):
         self.scene, self.store, self.path, self.flush_every = scene, store, path, flush_every
         grid = scene.grid
         #: the snapshot steps, sorted (an array: a set of millions of ints took gigabytes)
@@ -159,7 +160,7 @@ class Recorder:
         t_all = self.snapshot_times()
         ds = xr.Dataset(coords=self._coords(t_all))
         n1, n3 = self.x1.size, self.x3.size
-        ct = max(1, min(self.flush_every, (8 << 20) // max(1, 8 * n1 * n3)))   # <= 8 MB chunks
+        ct = snapshots_per_chunk(n1, n3, self.flush_every)   # <= 8 MB chunks
         for f in self.scene.record.fields:
             ds[f] = (("t", "x1", "x3"), da.full((t_all.size, n1, n3), np.nan, chunks=(ct, n1, n3)),
                      _attrs(self.scene, f))
@@ -401,8 +402,6 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
              hint="make the grid coarser or the run shorter, or run it anyway with check_memory=False "
                   "(cracklab run --no-memory-check)")
     if check_disk and path is not None:
-        from .disk import check_disk as holds, output_size
-
         holds(output_size(scene), path, what=f"the run of {scene.name!r}",
               hint="record fewer fields, less often (record.every, record.times) or on a region "
                    "(record.region), or write to a larger disk; or run it anyway with check_disk=False "
