@@ -22,6 +22,12 @@ def is_fast_size(n: int) -> bool:
     return n == 1
 
 
+def accepted_size(n: int) -> bool:
+    """n nodes along an axis of a 3D grid as Grid accepts them: an even fast FFT size, 2 ..
+    MAX_NODES_PER_AXIS (Grid refuses any other with the rule it breaks)."""
+    return 2 <= n <= MAX_NODES_PER_AXIS and n % 2 == 0 and is_fast_size(n)
+
+
 def next_fast_size(n: int) -> int:
     m = max(int(n), 2)
     while not (is_fast_size(m) and m % 2 == 0):

@@ -7,7 +7,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import InputError, check_positive
-from ..model.grid import MAX_NODES, MAX_NODES_PER_AXIS, Grid, is_fast_size
+from ..model.grid import MAX_NODES, MAX_NODES_PER_AXIS, Grid, accepted_size, is_fast_size
 from ..model.material import Material
 
 UNIT = Material(mu=1.0, cs=1.0, nu=0.25)
@@ -46,13 +46,8 @@ def node_grid(builder, names, **grid_args) -> Grid:
                                      f"{builder})") from None
 
 
-def _accepted(n: int) -> bool:
-    """Nodes per axis a Grid accepts: an even fast FFT size, at most MAX_NODES_PER_AXIS."""
-    return 2 <= n <= MAX_NODES_PER_AXIS and n % 2 == 0 and is_fast_size(n)
-
-
 def _fits(n1, n3) -> bool:
-    return _accepted(n1) and _accepted(n3) and n1 * n3 <= MAX_NODES
+    return accepted_size(n1) and accepted_size(n3) and n1 * n3 <= MAX_NODES
 
 
 def _exact(n, dx, L) -> bool:
