@@ -29,3 +29,12 @@ def gammas_sample(grid, dt, cs, limit=1 << 20):
     ks, ms = k[::step], m[::step]
     q = np.sqrt(ks[:, None] ** 2 + ms[None, :] ** 2).ravel()
     return mode_gamma(q, cs, dt), total / q.size
+
+
+def directions(grid) -> tuple:
+    """(q, c, s) of every mode of the grid's spectral layout: the wave-vector magnitude
+    q = sqrt(k^2 + m^2) and the cosines c = k/q, s = m/q of Eq. (28) (0 for q = 0)."""
+    k, m = grid.wavenumbers()
+    q = np.sqrt(k**2 + m**2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return q, np.where(q > 0, k / q, 0.0), np.where(q > 0, m / q, 0.0)

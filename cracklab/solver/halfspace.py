@@ -38,6 +38,7 @@ from .loops import (mirror_rotate, mirror_separate, mirror_shear_correct, mirror
                     product_predict, rotate, shear_correct, shear_predict)
 from .schemes import Channel, scheme_of
 from .spectral import Transforms
+from ..elastic.modes import directions
 from .stability import mode_gamma
 
 
@@ -101,12 +102,8 @@ class HalfSpace:
         self.scale = scale
         self.components = tuple(sorted(components))
         self.fft = transforms or Transforms(grid)
-        k, m = grid.wavenumbers()
-        q = np.sqrt(k**2 + m**2)
+        q, self.c, self.s = directions(grid)
         self.q = q
-        with np.errstate(invalid="ignore", divide="ignore"):
-            self.c = np.where(q > 0, k / q, 0.0)
-            self.s = np.where(q > 0, m / q, 0.0)
         gamma = mode_gamma(q, material.cs, dt)
         nu = material.nu
         self.shear3d = (not grid.plane) and any(c in self.components for c in (1, 3))

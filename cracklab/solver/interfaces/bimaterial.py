@@ -33,6 +33,7 @@ from ...jit import compiled_loop as _compiled
 from ..loops import rotate
 from ..schemes import SCHEMES, scheme_of
 from ..spectral import Transforms
+from ...elastic.modes import directions
 from .base import Interface, register
 
 
@@ -112,11 +113,7 @@ class Bimaterial(Interface):
         self.materials = (top, bottom)
         self.components = tuple(sorted(components))
         self.fft = transforms or Transforms(grid)
-        k, m = grid.wavenumbers()
-        q = np.sqrt(k**2 + m**2)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            self.c = np.where(q > 0, k / q, 0.0)
-            self.s = np.where(q > 0, m / q, 0.0)
+        q, self.c, self.s = directions(grid)
         inplane, transverse = _parts(grid.plane, self.components)
         self.parts = (("L", "N") if inplane else ()) + (("T",) if transverse else ())
         opts = dict(engine=engine, window=window, nsteps=nsteps, threads=threads or self.fft.workers, scheme=scheme)
