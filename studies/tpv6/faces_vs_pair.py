@@ -17,9 +17,11 @@ from cracklab import scenes
 from cracklab.model.material import Material
 from cracklab.solver.interfaces import for_scene
 
+from studies.tpv6.scene import DOMAIN
+
 
 def main(dx, t_end=12.0):
-    base = scenes.tpv6(dx=dx, t_end=t_end)
+    base = scenes.tpv6(dx=dx, t_end=t_end, domain=DOMAIN)
     near = base.materials[1]
     nearly = Material(mu=near.mu * (1 + 1e-6), cs=near.cs, nu=near.nu)
     out = {}

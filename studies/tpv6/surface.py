@@ -51,6 +51,7 @@ import numpy as np
 
 from studies.benchmarks import harness as H
 from studies.tpv6 import compare as C
+from studies.tpv6.scene import DOMAIN
 
 STRIKES_KM = (0, -12, 12)
 SIGMA_N = 120.0e6          # Pa: TPV6's initial compression, held constant in the control
@@ -77,7 +78,7 @@ def run_3d(dx, t_end, constant_normal):
     from cracklab import Record
     from cracklab.scenes import tpv6
 
-    sc = tpv6(dx=dx, t_end=t_end)
+    sc = tpv6(dx=dx, t_end=t_end, domain=DOMAIN)
     xc = sc.grid.x1[sc.grid.n1 // 2]
     sc = sc.replace(record=Record(fields=(), stations=_stations(sc.grid, xc)))
     if constant_normal:

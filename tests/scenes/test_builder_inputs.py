@@ -84,7 +84,7 @@ def test_a_bad_spacing_names_the_builders_argument(build, dx):
                                                 (scenes.tpv102, 5000.0, (4500.0, 6000.0)),
                                                 (scenes.tpv3, 7000.0, (4000.0, None)),
                                                 (scenes.tpv5, 1e5, (6000.0, None)),
-                                                (scenes.tpv6, 20000.0, (6000.0, None))])
+                                                (scenes.tpv6, 4500.0, (4000.0, 5000.0))])
 def test_a_spacing_that_gives_no_fast_grid_is_refused_with_the_nearest_ones(build, dx, nearest):
     with pytest.raises(InputError) as err:
         build(dx=dx, t_end=0.1)
