@@ -24,6 +24,7 @@ from .model.material import Material  # noqa: E402
 from .analysis.modal import modal_response  # noqa: E402
 from .model.record import Record  # noqa: E402
 from .model.scene import Numerics, Scene  # noqa: E402
+from .model.sequence import Sequence  # noqa: E402
 from .output.simulate import scene_of, simulate, stations  # noqa: E402
 
 #: every law of cracklab.laws, by its class name (LinearCohesive, SlipWeakening, ...)
@@ -31,7 +32,7 @@ globals().update({_law.__name__: _law for _law in _LAWS.values()})
 
 __all__ = [
     "Grid", "InputError", "Loading", "Material", "Numerics",
-    "Record", "Scene", "SimulationError", "analysis", "ensemble",
+    "Record", "Scene", "Sequence", "SimulationError", "analysis", "ensemble",
     "kernels", "modal_response", "open_ensemble", "register_builder",
     "point_load", "scene_of", "scenes", "simulate", "stations", "__version__",
 ] + sorted(_law.__name__ for _law in _LAWS.values())

@@ -55,8 +55,17 @@ def _when(sc, step) -> str:
     return f"t = {step * sc.dt:.4g}{'' if u == '1' else ' ' + u}"
 
 
-def _outcome(sc, first, wall) -> str:
-    """The line that ends a complete run: steps run, simulated time, wall time."""
+def _outcome(sc, first, wall, result=None) -> str:
+    """The line that ends a complete run: steps run, simulated time, wall time (a sequence:
+    its accepted steps, their range and its events)."""
+    if sc.sequence is not None and result is not None:
+        u = sc.units["time"]
+        unit = "" if u == "1" else " " + u
+        resumed = result.attrs.get("cracklab_resumed_from")
+        return (f"complete: {'resumed after accepted step %d, ' % resumed if resumed is not None else ''}"
+                f"{result.attrs['accepted_steps']} accepted steps of {result.attrs['smallest_step']:.3g} to "
+                f"{result.attrs['largest_step']:.3g}{unit} (t = {sc.t_end:.4g}{unit} simulated), "
+                f"{result.sizes.get('event', 0)} events, in {fmt_time(wall)} wall")
     if first:
         return (f"complete: resumed from step {first}, ran steps {first + 1} to {sc.nsteps} ({_when(sc, first)} "
                 f"to {_when(sc, sc.nsteps)[4:]} simulated) in {fmt_time(wall)} wall")
@@ -181,8 +190,8 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", StoreWarning)
-                simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every, resume=resume,
-                         check_memory=not no_memory_check, check_disk=not no_disk_check)
+                result = simulate(sc, progress=progress, store=output, checkpoint_every=checkpoint_every,
+                                  resume=resume, check_memory=not no_memory_check, check_disk=not no_disk_check)
         finally:
             # shown once the recording has stopped: while it records, showwarning appends to ``caught``
             for w in caught:
@@ -209,7 +218,7 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
         click.echo(f"cracklab: {output} holds this run, complete (checked); nothing to do (--no-resume computes "
                    f"it again)")
     else:
-        print_note(_outcome(sc, first, time.monotonic() - t0))
+        print_note(_outcome(sc, first, time.monotonic() - t0, result))
         click.echo(f"cracklab: wrote {output}")
 
 

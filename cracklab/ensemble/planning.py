@@ -13,7 +13,7 @@ from ..scenes.registry import accepts, builder_name, resolve_builder
 from .identity import canonical, canonical_json, decode, member_id, scene_digest
 from .spec import Builder, Member, Sweep
 
-SECTIONS = ("material", "grid", "law", "loading", "record", "numerics")
+SECTIONS = ("material", "grid", "law", "loading", "record", "numerics", "sequence")
 TOP_LEVEL = ("t_end", "beta", "name")
 SEED_BITS = 53          # seeds fit exactly in float64, int64 and JSON numbers
 

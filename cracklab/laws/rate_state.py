@@ -162,6 +162,22 @@ def _newton(T, A, eta, lnc, x0, V0, tol):
     return V, x, -MAX_ITERATIONS
 
 
+def _fss(law, V, lnv, a, b, f0, fw, Vw):
+    """f_ss(V) of the slip laws, lnv = ln(V / V0): f0 - (b - a) lnv, with strong velocity
+    weakening (``law`` STRONG) f_w + (f_LV - f_w) / [1 + (V / V_w)^8]^(1/8)."""
+    fss = f0 - (b - a) * lnv
+    if law == STRONG:
+        r = V / Vw
+        r8 = r * r
+        r8 = r8 * r8
+        r8 = r8 * r8
+        if r8 > 1e-16:
+            fss = fw + (fss - fw) / (1.0 + r8) ** 0.125
+        else:
+            fss = fss - (fss - fw) * 0.125 * r8
+    return fss
+
+
 def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
     """(z, psi) after dt at the constant slip rate V >= 0 (exact) from z (and psi of z, for the
     ageing law): for the ageing law z = exp((psi - f0) / b) = V0 theta / L, for the slip laws
@@ -185,17 +201,7 @@ def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
         return z, z
     em = s * (1.0 - s * (0.5 - s * SIXTH)) if s < 1e-4 else -math.expm1(-s)   # 1 - e^-s
     lnv = (lnV if lnV == lnV else math.log(V)) - ln2v0 + LN2                  # ln(V / V0)
-    fss = f0 - (b - a) * lnv
-    if law == STRONG:
-        r = V / Vw
-        r8 = r * r
-        r8 = r8 * r8
-        r8 = r8 * r8
-        if r8 > 1e-16:
-            fss = fw + (fss - fw) / (1.0 + r8) ** 0.125
-        else:
-            fss = fss - (fss - fw) * 0.125 * r8
-    y = fss * ia
+    y = _fss(law, V, lnv, a, b, f0, fw, Vw) * ia
     if not (y > 1e-300):
         y = 1e-300
     psiss = a * (LN2 - lnv + _lnsinh(y))             # f(V, psiss) = fss
@@ -410,8 +416,8 @@ def _chunked(n, chunk, fast, fast_args, slide_args):
     return total, solves, most, bad
 
 
-_HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_evolve")
-_PASSES = ("_slide_loop", "_fast_loop")
+_HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_fss", "_evolve")
+_PASSES = ("_slide_loop", "_fast_loop", "_rate_loop")
 _KERNEL = []
 #: LLVM vectorises a loop over several arrays only behind run-time checks that they do not
 #: overlap, and by default gives up beyond 8 such checks; numba has no way to declare its
@@ -419,6 +425,38 @@ _KERNEL = []
 #: for the loops compiled after them in this process (vectorised or not, a loop without
 #: fast-math computes the same IEEE results in the same order).
 LLVM_OPTIONS = ("-runtime-memory-check-threshold=512", "-vectorize-memory-check-threshold=4096")
+
+
+def _rate_loop(T, psi, sig, eta, a, sa, b, sb, V0, sV0, L, sL, f0, sf0, fw, sfw, Vw, sVw, law, guess, V, lnV,
+               dpsi):
+    """The sequence solvers' pass (:meth:`RateState.slide_rates`): at every point, V >= 0
+    with T - eta V = sigma a asinh(V / (2 V0) e^(psi / a)) from the guess ln V ``guess``
+    (NaN: none), into ``V``, ``lnV``, and the state's rate dpsi/dt of the evolution ``law``
+    at it into ``dpsi``; a parameter x comes with its stride sx (0: one value). Returns the
+    first point that failed, or -1."""
+    for i in range(T.size):
+        ai = a[i * sa]
+        V0i = V0[i * sV0]
+        x0 = guess[i]
+        v, x, it = _newton(T[i], sig[i] * ai, eta, psi[i] / ai - math.log(2.0 * V0i), x0,
+                           math.exp(x0) if x0 == x0 else 0.0, STEP_TOL)
+        if it < 0:
+            return i
+        V[i] = v
+        lnV[i] = x
+        bi = b[i * sb]
+        Li = L[i * sL]
+        if law == AGEING:
+            dpsi[i] = (bi * V0i / Li) * (math.exp((f0[i * sf0] - psi[i]) / bi) - v / V0i)
+        elif v > 0.0:
+            lnv = x - math.log(V0i)                     # ln(V / V0)
+            y = _fss(law, v, lnv, ai, bi, f0[i * sf0], fw[i * sfw], Vw[i * sVw]) / ai
+            if not (y > 1e-300):
+                y = 1e-300
+            dpsi[i] = -(v / Li) * (psi[i] - ai * (LN2 - lnv + _lnsinh(y)))
+        else:
+            dpsi[i] = 0.0
+    return -1
 
 
 def _compile_at(numba):
@@ -580,6 +618,7 @@ every = 10
 hypocentre = [19200.0, 9600.0]
 """
     state_variables = {"psi": ("state variable psi of f = a asinh[V exp(psi / a) / (2 V0)]", "1"), **NORMAL_STATE}
+    heals = True
 
     def __post_init__(self):
         for name in ("a", "b", "L", "V0"):
@@ -709,6 +748,106 @@ hypocentre = [19200.0, 9600.0]
             return v, None
         tau.update(ts)
         return v, {c: tau[c] for c in v}
+
+    # -- the sequence solvers' protocol (cracklab.solver.sequence)
+    def _at_points(self, name, at):
+        """The parameter ``name`` as a number, or its field flattened and taken at the flat
+        mask or indices ``at`` (None: every point)."""
+        v = np.asarray(getattr(self, name), dtype=float)
+        return v if v.ndim == 0 or at is None else v.ravel()[at]
+
+    def slide_rates(self, T, psi, sigma, eta, guess=None, at=None):
+        """The slip rate V >= 0 with T - eta V = sigma f(V, psi) at every point (docs/reference/
+        equations.md, "Rate-and-state friction") and the state's rate dpsi/dt at it, from the
+        shear traction magnitude T if the plane stopped, the state psi, the compressive
+        normal stress sigma and the radiation damping eta (a number): step (v) without a
+        state update, for solvers that integrate psi themselves (cracklab.solver.sequence),
+        in one compiled pass. ``guess``: ln V to start Newton from (None: the analytic
+        bracket); ``at``: the points of the grid (a flat mask) T holds, for parameters that
+        are fields. Returns (V, ln V, dpsi/dt), flat arrays."""
+        T = np.ascontiguousarray(T, dtype=float).ravel()
+        n = T.size
+
+        def flat(x):
+            x = np.asarray(x, dtype=float).ravel()
+            return x if x.size == n and x.flags.c_contiguous else np.ascontiguousarray(np.broadcast_to(x, (n,)))
+
+        params = self._points(at, n)
+        x0 = np.full(n, np.nan) if guess is None else flat(guess)
+        V, lnV, dpsi = np.empty(n), np.empty(n), np.empty(n)
+        law = AGEING if self.evolution == "ageing" else STRONG if self.f_w is not None else SLIP
+        _kernel()
+        bad = globals()["_rate_loop"](T, flat(psi), flat(sigma), float(eta), *params, law, x0, V, lnV, dpsi)
+        if bad >= 0:
+            raise SimulationError(f"rate-and-state: no slip rate V >= 0 solves T - eta V = sigma f(V, psi) at point "
+                                  f"{bad}: T = {T[bad]:.6g}, sigma = {flat(sigma)[bad]:.6g}, eta = {eta:.6g}, "
+                                  f"psi = {flat(psi)[bad]:.6g}")
+        return V, lnV, dpsi
+
+    def _points(self, at, n):
+        """(array, stride) pairs of a, b, V0, L, f0, f_w, V_w at the points ``at`` (cached)."""
+        last = self._cache.get("points")
+        if last is not None and last[0] is at and last[1] == n:     # the same mask as the last call
+            return last[2]
+        key = ("points", n, None if at is None else hash(np.asarray(at).tobytes()))
+        if key not in self._cache:
+            out = []
+            for name, missing in (("a", None), ("b", None), ("V0", None), ("L", None), ("f0", None), ("f_w", 0.0),
+                                  ("V_w", 1.0)):
+                v = getattr(self, name)
+                arr = np.asarray(missing if v is None else v, dtype=float)
+                if arr.ndim == 0 or arr.size == 1:
+                    out += [arr.reshape(1).copy(), 0]
+                else:
+                    arr = arr.ravel() if at is None else arr.ravel()[at]
+                    out += [np.ascontiguousarray(arr), 1]
+            self._cache[key] = tuple(out)
+        self._cache["points"] = (at, n, self._cache[key])
+        return self._cache[key]
+
+    def slip_rate(self, T, psi, sigma, eta, guess=None, at=None):
+        """(V, ln V) of :meth:`slide_rates`, in T's shape."""
+        shape = np.shape(T)
+        V, lnV, _ = self.slide_rates(T, psi, sigma, eta, guess, at)
+        return V.reshape(shape), lnV.reshape(shape)
+
+    def initial_state(self, T, sigma, eta):
+        """psi at t = 0 over the grid: ``psi_ini``, or the state at which the plane slides at
+        V_ini under the shear traction magnitude T (a field), sigma f(V_ini, psi) = T - eta V_ini."""
+        T = np.asarray(T, dtype=float)
+        if self.psi_ini is not None:
+            return np.array(np.broadcast_to(np.asarray(self.psi_ini, dtype=float), T.shape))
+        a, V0, Vi = (np.asarray(x, dtype=float) for x in (self.a, self.V0, self.V_ini))
+        y = (T - eta * Vi) / (np.asarray(sigma, dtype=float) * a)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lnsinh = np.where(y > 20.0, y - LN2, np.log(np.sinh(np.minimum(y, 20.0))))
+        return np.array(np.broadcast_to(a * (np.log(2.0 * V0 / Vi) + lnsinh), T.shape))
+
+    def steady_state(self, V, at=None):
+        """psi_ss(V), the state at which f(V, psi_ss) = f_ss(V) (module docstring); ``at`` as
+        for :meth:`slip_rate`."""
+        V = np.asarray(V, dtype=float)
+        a, b, V0, f0 = (self._at_points(n, at) for n in ("a", "b", "V0", "f0"))
+        lnv = np.log(V / V0)
+        fss = f0 - (b - a) * lnv
+        if self.f_w is not None:
+            fw, Vw = self._at_points("f_w", at), self._at_points("V_w", at)
+            fss = fw + (fss - fw) / (1.0 + (V / Vw) ** 8) ** 0.125
+        y = np.maximum(fss / a, 1e-300)
+        lnsinh = np.where(y > 20.0, y - LN2, np.log(np.sinh(np.minimum(y, 20.0))))
+        return a * (LN2 - lnv + lnsinh)
+
+    def state_rate(self, V, psi, at=None):
+        """dpsi/dt at slip rate V and state psi: the ageing law (b V0 / L)[exp((f0 - psi) / b)
+        - V / V0], or the slip law -(V / L)(psi - psi_ss(V)) (module docstring); ``at`` as
+        for :meth:`slip_rate`."""
+        V, psi = np.asarray(V, dtype=float), np.asarray(psi, dtype=float)
+        b, V0, L, f0 = (self._at_points(n, at) for n in ("b", "V0", "L", "f0"))
+        if self.evolution == "ageing":
+            with np.errstate(over="ignore"):     # a trial stage far off: inf, which the step rejects
+                return (b * V0 / L) * (np.exp((f0 - psi) / b) - V / V0)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return np.where(V > 0, -(V / L) * (psi - self.steady_state(np.maximum(V, 1e-300), at)), 0.0)
 
     def _constants(self, shape, dt):
         """The parameters as (flat array, stride) for the pass, with 1 / a, dt / L, V0 dt / L and ln(2 V0)."""

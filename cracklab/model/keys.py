@@ -6,7 +6,7 @@ each value listed in ``refused`` is refused by the scene's validation with an In
 naming that key.
 
 Unit kinds are those of ``laws.base.UNITS`` ("stress", "length", "velocity", "time", "1":
-a pure number, in the scene's ``[units]``), or "-" for what is not a quantity (a name,
+a pure number, in the scene's ``[units]``; "stiffness", stress per length), or "-" for what is not a quantity (a name,
 a count, a switch).
 """
 from __future__ import annotations
@@ -19,6 +19,7 @@ from .grid import MAX_NODES, MAX_NODES_PER_AXIS
 from .loading import TIME_FUNCTIONS
 from .record import FIELDS
 from .scene import FORMULATIONS, MAX_FFT_THREADS
+from .sequence import PAIRS, RESPONSES
 
 INF = float("inf")
 NAN = float("nan")
@@ -112,6 +113,29 @@ SECTION_KEYS = {
                            "engine_threads)", (0, 2000, 1.5)),
         "engine_threads": Key("-", f"an integer, 1 .. {MAX_FFT_THREADS}", "threads of the history engine (absent: as "
                               "fft_threads)", (0, 1.5)),
+    },
+    "sequence": {
+        "response": Key("-", _choices(RESPONSES[:1]), "the elastic response: the static one plus radiation damping "
+                        "(\"dynamic\", the full history at a variable step, is not available yet)", ("dynamic", "qd")),
+        "plate_rate_1": Key("velocity", f">= 0, in {SCALE_RANGE} or 0; this or plate_rate_3 > 0", "plate rate along x1",
+                            (-1e-9, NAN)),
+        "plate_rate_3": Key("velocity", f">= 0, in {SCALE_RANGE} or 0", "plate rate along x3", (-1e-9, INF)),
+        "creep": Key("-", "a mask; not the whole plane", "points that creep at the plate rate (kinematic)",
+                     (1.5,)),
+        "stiffness": Key("stiffness", f">= 0, in {SCALE_RANGE} or 0", "spring on the mean slip: tau += k "
+                         "(V_p t - mean slip)", (-1.0,)),
+        "tolerance": Key("1", "in (0, 1)", "relative error of a step: slip against L + |slip|, state against a",
+                         (0.0, 1.5)),
+        "dt_min": Key("time", f"{SCALE}; <= dt_max", "smallest step (absent: 1e-3 dx / cs); a step that cannot meet "
+                      "the tolerance at it stops the run", (0.0,)),
+        "dt_max": Key("time", f"{SCALE}; >= dt_min", "largest step (absent: t_end / 50)", (-1.0,)),
+        "dt_first": Key("time", f"{SCALE}; in [dt_min, dt_max]", "first step tried (absent: dx / cs)", (0.0,)),
+        "pair": Key("-", _choices(PAIRS), "embedded Runge-Kutta pair (orders 5 and 3)", ("euler",)),
+        "event_threshold": Key("velocity", SCALE, "an event lasts while the largest slip rate exceeds this", (0.0,)),
+        "slow_interval": Key("time", SCALE, "fields recorded this often between events (absent: t_end / 100)", (0.0,)),
+        "fast_interval": Key("time", SCALE, "fields recorded this often during events (absent: 100 dx / cs)", (0.0,)),
+        "station_every": Key("-", "an integer >= 1", "stations and the largest slip rate every this many accepted "
+                             "steps", (0, 1.5)),
     },
 }
 

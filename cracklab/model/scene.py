@@ -12,6 +12,7 @@ from .grid import Grid
 from ..laws import LAWS, law_parameters
 from .loading import Loading
 from .material import Material
+from .sequence import Sequence
 from .record import FIELDS, Record, face_field
 from ..solver.interfaces import interface_type
 from ..solver.schemes import SCHEMES
@@ -127,6 +128,9 @@ class Scene:
     #: {field: where it was read}, for a field read from a file (cracklab.model.field_files):
     #: written as its input variable's ``source`` attribute; not part of the scene's identity
     sources: dict = field(default_factory=dict, compare=False, repr=False)
+    #: a sequence of earthquakes (cracklab.model.sequence): the plate's loading and the
+    #: adaptive time step; None: one rupture at the fixed step beta
+    sequence: Sequence | None = None
 
     def __post_init__(self):
         check_fields_nesting(self, "")
@@ -175,6 +179,20 @@ class Scene:
             object.__setattr__(self, "record", dataclasses.replace(
                 self.record, fields=tuple(f"delta_{c}" for c in active)))
         self.law.check_scene(self)
+        if self.sequence is not None:
+            if not isinstance(self.sequence, Sequence):
+                raise InputError("sequence", f"must be a cracklab.Sequence, got {type(self.sequence).__name__}")
+            self.sequence.check_scene(self)
+            if self.beta is None:      # the dynamic step's fraction, for the fully dynamic response
+                object.__setattr__(self, "beta", min(DEFAULT_BETA, self.beta_max))
+        else:
+            self._check_steps(kind, active)
+        self.record.region_slices(self.grid)
+        self.record.station_nodes(self.grid)
+        self._check_record_fields(active)
+
+    def _check_steps(self, kind, active):
+        """beta within the scheme's stable limit, and the fixed steps and snapshots within bounds."""
         bmax = self.beta_max
         if self.beta is None:  # the default: 0.5, or the stable limit where that is lower
             object.__setattr__(self, "beta", min(DEFAULT_BETA, bmax))
@@ -201,8 +219,8 @@ class Scene:
                                                  f"(every >= {self.nsteps // MAX_SNAPSHOTS + 1} for "
                                                  f"{self.nsteps} steps), got {every}")
         self.record.snapshot_steps(self.nsteps, self.dt)
-        self.record.region_slices(self.grid)
-        self.record.station_nodes(self.grid)
+
+    def _check_record_fields(self, active):
         state = type(self.law).state_variables
         for f in self.record.fields:
             if f in state and self.law.unrecordable(f):

@@ -46,8 +46,11 @@ from .units import check_scene_units, input_unit, parameter_kind, unit
 from .loading import Loading
 from .material import Material
 from .record import Record
+from .sequence import Sequence
 
-SECTIONS = ("material", "grid", "law", "loading", "record", "numerics")
+SECTIONS = ("material", "grid", "law", "loading", "record", "numerics", "sequence")
+#: sections a scene may leave out (None), written only when present
+OPTIONAL_SECTIONS = ("sequence",)
 TOP = ("t_end", "beta", "units", "name")
 UNIT_KEYS = ("length", "time", "stress")
 DEFAULT_UNITS = {"length": "1", "time": "1", "stress": "1"}
@@ -60,6 +63,7 @@ _OVERRIDES = {
     ("record", "times"): "numbers",
     ("record", "region"): "region",
     ("record", "stations"): "stations",
+    ("sequence", "creep"): "mask",
 }
 _EXPECT = {
     "number": "a number",
@@ -78,7 +82,7 @@ def section_classes() -> dict:
     from .scene import Numerics
 
     return {"material": Material, "grid": Grid, "loading": Loading, "record": Record,
-            "numerics": Numerics}
+            "numerics": Numerics, "sequence": Sequence}
 
 
 def _kind(section: str, f: dataclasses.Field) -> tuple[str, bool]:
@@ -123,6 +127,8 @@ def _items(scene):
     """(section, key, value) of every parameter of the scene's parts."""
     for section in SECTIONS:
         obj = getattr(scene, section)
+        if obj is None and section in OPTIONAL_SECTIONS:
+            continue
         items = law_parameters(obj) if section == "law" else {f.name: getattr(obj, f.name)
                                                                for f in dataclasses.fields(obj)}
         for key, value in items.items():
@@ -152,7 +158,7 @@ def scene_to_data(scene) -> tuple[dict, dict]:
     Array-valued parameters appear in the dict as {"array": "input_<section>_<key>"},
     non-finite floats as {"float": "inf"}, None values are left out."""
     arrays = {}
-    data = {s: {} for s in SECTIONS}
+    data = {s: {} for s in SECTIONS if s not in OPTIONAL_SECTIONS or getattr(scene, s) is not None}
     data["law"]["kind"] = scene.law.kind
     for section, key, value in _items(scene):
         if value is None:
@@ -188,6 +194,8 @@ def _toml_text(scene, field) -> str:
     data = {"name": scene.name, "t_end": _plain(scene.t_end), "beta": _plain(scene.beta),
             "units": dict(scene.units)}
     for section in SECTIONS:
+        if section in OPTIONAL_SECTIONS and getattr(scene, section) is None:
+            continue
         data[section] = {"kind": scene.law.kind} if section == "law" else {}
     for section, key, value in _items(scene):
         if value is None:
@@ -600,6 +608,9 @@ def scene_from_data(data: dict, arrays: dict | None = None, *, base=NO_FILES, al
     parts["law"] = _build("law", LAWS[kind], law_data, arrays, files=files)
     for s in ("loading", "record", "numerics"):
         parts[s] = _build(s, classes[s], data.get(s), arrays, files=files if s == "loading" else None)
+    for s in OPTIONAL_SECTIONS:
+        if s in data:
+            parts[s] = _build(s, classes[s], data[s], arrays, files=files)
     top = {"t_end": _coerce("t_end", "number", data["t_end"], arrays)}
     if "beta" in data:
         top["beta"] = _coerce("beta", "number", data["beta"], arrays)
@@ -658,7 +669,7 @@ def _field_vars(ds):
     for name in ds.data_vars:
         stem = name[len("input_"):] if name.startswith("input_") else name
         section, _, key = stem.partition("_")
-        if section not in ("law", "loading") or not key:
+        if section not in ("law", "loading") + OPTIONAL_SECTIONS or not key:
             continue
         var = ds[name]
         prefix = "input_" if name.startswith("input_") else ""

@@ -22,11 +22,13 @@ DIMENSIONLESS = "1"
 
 def unit(units: dict, kind: str) -> str:
     """The unit string of a quantity of ``kind`` ("stress", "length", "time", "velocity",
-    or "1" for a pure number) in the scene units ``units``."""
+    "stiffness" (stress per length), or "1" for a pure number) in the scene units ``units``."""
     if kind == "1":
         return "1"
     if kind == "velocity":
         return "1" if units["length"] == "1" and units["time"] == "1" else f"{units['length']} {units['time']}-1"
+    if kind == "stiffness":        # stress per length (a spring on the slip)
+        return "1" if units["length"] == "1" and units["stress"] == "1" else f"{units['stress']} {units['length']}-1"
     return units[kind]
 
 

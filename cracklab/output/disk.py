@@ -68,7 +68,10 @@ def output_size(scene) -> OutputEstimate:
     """The bytes a run of ``scene`` writes into its store (see the module docstring)."""
     grid, rec = scene.grid, scene.record
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
-    nsnap = rec.snapshot_count(scene.nsteps, scene.dt) if rec.fields else 0
+    if scene.sequence is not None:      # an estimate: a sequence's steps and events are its own
+        nsnap, rows = scene.sequence.expected_rows(scene)
+    else:
+        nsnap, rows = (rec.snapshot_count(scene.nsteps, scene.dt) if rec.fields else 0), scene.nsteps + 1
     frame = 8 * n1r * n3r
     per_chunk = snapshots_per_chunk(n1r, n3r)
     full, rest = divmod(nsnap, per_chunk)
@@ -77,7 +80,7 @@ def output_size(scene) -> OutputEstimate:
     bound = field * len(rec.fields)
     # the time coordinate, station series (one array per field, station x t_station), rupture time
     nst = len(rec.stations or {})
-    series = 8 * (scene.nsteps + 1) * nst
+    series = 8 * rows * nst
     nser = 3 * len(scene.components) + 1 + sum(1 for f in rec.fields if face_field(f))
     small = [8 * nsnap, 8 * grid.shape[0] * grid.shape[1]] + [series] * (nser if nst else 0)
     small += [8 * grid.shape[0] * grid.shape[1]] * sum(1 for _ in _input_fields(scene))

@@ -13,38 +13,9 @@ from .disk import FLUSH, check_disk as holds, output_size, snapshots_per_chunk
 from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
 from ..model.record import face_field
 from ..model.scene_io import scene_from_data, scene_to_json
-from ..model.units import input_unit, unit
+from .policy import CHECKPOINT_SECONDS, checkpoint_policy  # noqa: F401
+from .attrs import LONG_NAMES, field_attrs, input_attrs  # noqa: F401  (simulate.LONG_NAMES as before)
 from ..solver.stepper import Stepper
-
-LONG_NAMES = {
-    "delta_1": ("slip along x1", "length"), "delta_2": ("opening", "length"),
-    "delta_3": ("slip along x3", "length"), "v_1": ("slip rate along x1", "velocity"),
-    "v_2": ("opening rate", "velocity"), "v_3": ("slip rate along x3", "velocity"),
-    "tau_1": ("shear traction along x1", "stress"), "tau_2": ("normal traction (tension positive)", "stress"),
-    "tau_3": ("shear traction along x3", "stress"), "strength": ("strength of the interface", "stress"),
-    **{f"{k}_{c}_{side}": (f"{what} along x{c} of the {side} face (x2 = 0{'+' if side == 'top' else '-'})", kind)
-       for k, what, kind in (("u", "displacement", "length"), ("v", "velocity", "velocity"))
-       for side in ("top", "bottom") for c in (1, 2, 3)},
-}
-
-
-def _attrs(scene, name):
-    if name in LONG_NAMES:
-        long_name, kind = LONG_NAMES[name]
-    else:  # a state variable of the law
-        long_name, kind = type(scene.law).state_variables[name]
-    return {"long_name": long_name, "units": unit(scene.units, kind)}
-
-
-def _input_attrs(scene, name):
-    """Attrs of a scene input field stored as ``input_<section>_<key>``."""
-    section, key = name[len("input_"):].split("_", 1)
-    attrs = {"long_name": f"scene input {section}.{key}", "units": input_unit(scene, section, key)}
-    source = scene.sources.get(f"{section}.{key}")
-    if source:
-        attrs["source"] = source   # the field file it was read from (cracklab.model.field_files)
-    return attrs
-
 
 def _field(state, name, faces=None):
     """The field ``name`` of ``state``; ``faces``: a dict that keeps the faces' fields of
@@ -124,7 +95,7 @@ class Recorder:
         t = np.array([it[0] for it in items])
         ds = xr.Dataset(coords=self._coords(t))
         for f in self.scene.record.fields:
-            ds[f] = (("t", "x1", "x3"), np.stack([it[1][f] for it in items]), _attrs(self.scene, f))
+            ds[f] = (("t", "x1", "x3"), np.stack([it[1][f] for it in items]), field_attrs(self.scene, f))
         return ds
 
     def _coords(self, t):
@@ -163,9 +134,9 @@ class Recorder:
         ct = snapshots_per_chunk(n1, n3, self.flush_every)   # <= 8 MB chunks
         for f in self.scene.record.fields:
             ds[f] = (("t", "x1", "x3"), da.full((t_all.size, n1, n3), np.nan, chunks=(ct, n1, n3)),
-                     _attrs(self.scene, f))
+                     field_attrs(self.scene, f))
         for name, arr in self.inputs.items():
-            ds[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(self.scene, name))
+            ds[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(self.scene, name))
         ds.attrs = self.global_attrs("running")
         if self.path is not None:
             # the group and its attrs first: a kill while creating leaves a store that
@@ -263,7 +234,8 @@ class Recorder:
                             {"units": scene.units["length"], "long_name": "station x3"}),
                 t_station=("t_station", t_all, {"units": scene.units["time"], "long_name": "time"}))
             for f in self.station_fields:
-                extra[f"station_{f}"] = (("station", "t_station"), self.series[f][:last_n + 1].T, _attrs(scene, f))
+                extra[f"station_{f}"] = (("station", "t_station"), self.series[f][:last_n + 1].T,
+                                         field_attrs(scene, f))
         if self.store is not None:
             if not self.written:
                 self.create()
@@ -290,7 +262,7 @@ class Recorder:
                 checkpoint.remove(self.path)
             return xr.open_zarr(self.store, consolidated=False)
         for name, arr in self.inputs.items():
-            extra[name] = (("input_x1", "input_x3"), np.asarray(arr), _input_attrs(scene, name))
+            extra[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(scene, name))
         parts = self.times or [xr.Dataset(coords={"t": self._coords(None)["t"]})]
         ds = xr.concat(parts, dim="t") if len(parts) > 1 else parts[0]
         ds = xr.merge([ds, extra], combine_attrs="override")
@@ -306,34 +278,6 @@ def _consolidate(store):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         zarr.consolidate_metadata(store)
-
-
-CHECKPOINT_SECONDS = 60.0
-
-
-def _checkpoint_policy(value):
-    """(every N steps, every S seconds of wall time) from ``checkpoint_every``."""
-    err = InputError("checkpoint_every", f"must be an integer >= 0 (steps; 0: never) or a duration "
-                                         f"like '60s' (seconds of wall time, > 0), got {value!r}")
-    if value is None:
-        return None, CHECKPOINT_SECONDS
-    if isinstance(value, str):
-        text = value.strip().lower()
-        if text.endswith("s"):
-            try:
-                sec = float(text[:-1])
-            except ValueError:
-                raise err from None
-            if not (sec > 0 and np.isfinite(sec)):
-                raise err
-            return None, sec
-        try:
-            value = int(text)
-        except ValueError:
-            raise err from None
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
-        raise err
-    return (int(value) or None), None
 
 
 def _damaged(path, report, doing):
@@ -369,7 +313,10 @@ def _deferred_interrupt(enabled):
 def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume=False, check_memory=True,
              check_disk=True):
     """Run ``scene``; return a Dataset indexed by (t, x1, x3) with the recorded fields,
-    ``rupture_time`` and, with stations, series over ``t_station``. With ``store`` the
+    ``rupture_time`` and, with stations, series over ``t_station``. A scene with ``sequence``
+    set runs with an adaptive step (``cracklab.output.sequence.run_sequence``: its output
+    has the event catalogue instead of ``rupture_time``; ``resume`` and
+    ``checkpoint_every`` as here, no memory or disk refusal: its steps are its own). With ``store`` the
     snapshots stream to that Zarr store during the run and the result is read back lazily.
     On a blow-up, what was recorded is kept (flushed to the store) and SimulationError raised.
 
@@ -390,7 +337,12 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     during a run into a local store stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
-    every_n, every_s = _checkpoint_policy(checkpoint_every)
+    if scene.sequence is not None:      # a sequence of earthquakes: the adaptive step (output/sequence.py)
+        from .sequence import run_sequence
+
+        return run_sequence(scene, progress=progress, store=store, resume=resume,
+                            checkpoint_every=checkpoint_every)
+    every_n, every_s = checkpoint_policy(checkpoint_every)
     adaptive = checkpoint_every is None     # the default: keep checkpoints under 10 % of the time
     path = checkpoint.local_path(store) if store is not None else None
     if resume and path is None:

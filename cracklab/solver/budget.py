@@ -82,6 +82,8 @@ def run_memory(scene, *, store=True) -> MemoryEstimate:
     from .interfaces import interface_type
     from .schemes import scheme_of
 
+    if scene.sequence is not None:
+        return _sequence_memory(scene, store)
     grid = scene.grid
     comps = scene.components
     scheme = scheme_of(scene.formulation)
@@ -221,3 +223,20 @@ def calibrate(scene, *, steps: int = 12, seconds: float = 3.0) -> dict:
         slope = max(float(slope), 0.0)
         total = max(total, float(icpt) * n + 0.5 * slope * n * n)
     return {"steps_timed": len(times), "ms_per_step": 1e3 * med, "setup_s": setup, "run_s": total}
+
+
+def _sequence_memory(scene, store) -> MemoryEstimate:
+    """A sequence run (solver/sequence): the unknowns and the pair's stages, the traction
+    and the transforms' arrays, the snapshots kept (all of them without a store; the
+    expected count, ``Sequence.expected_rows``) and the station rows."""
+    grid, rec = scene.grid, scene.record
+    N = grid.shape[0] * grid.shape[1]
+    nc = len([c for c in scene.components if c in (1, 3)]) or 1
+    stages = 8                                     # Dormand-Prince: seven stages and the new point
+    work = (nc + 1) * N * 8 * (stages + 4) + (nc * 6 + 10) * N * 8 + 4 * modes(grid) * 16
+    n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
+    nsnap, rows = scene.sequence.expected_rows(scene)
+    kept = min(nsnap, _FLUSH) if store else nsnap
+    snapshots = kept * n1r * n3r * 8 * len(rec.fields)
+    series = min(rows, 4096 if store else rows) * (len(rec.stations or {}) * (3 * nc + 1) + 5) * 8 * 2
+    return MemoryEstimate(0, int(work), int(snapshots + series), int(rows))

@@ -48,7 +48,7 @@ def groups() -> list[tuple[str, str, list[str]]]:
             "cracklab.Material", "cracklab.Material.cd", "cracklab.Material.rho", "cracklab.Material.cR",
             "cracklab.Material.a",
             "cracklab.Grid", "cracklab.Grid.x1", "cracklab.Grid.x3", "cracklab.Grid.dx1", "cracklab.Grid.dx3",
-            "cracklab.Loading", "cracklab.point_load", "cracklab.Record", "cracklab.Numerics",
+            "cracklab.Loading", "cracklab.point_load", "cracklab.Record", "cracklab.Numerics", "cracklab.Sequence",
             "cracklab.Scene", "cracklab.Scene.replace", "cracklab.Scene.dt", "cracklab.Scene.nsteps",
             "cracklab.Scene.beta_max", "cracklab.Scene.formulation", "cracklab.Scene.components",
             "cracklab.Scene.to_toml", "cracklab.Scene.from_toml", "cracklab.Scene.to_dataset",
@@ -57,7 +57,8 @@ def groups() -> list[tuple[str, str, list[str]]]:
         ("Solver", "`cracklab.solver`; its kernels are public as `cracklab.kernels`", [
             "cracklab.kernels.C_I", "cracklab.kernels.C_II", "cracklab.kernels.C_III", "cracklab.kernels.Z"]),
         ("Output", "`cracklab.output`", [
-            "cracklab.simulate", "cracklab.stations", "cracklab.scene_of", "cracklab.SimulationError"]),
+            "cracklab.simulate", "cracklab.stations", "cracklab.scene_of", "cracklab.SimulationError",
+            "cracklab.output.seas.export_seas"]),
         ("Ensemble", "`cracklab.ensemble`", [
             "cracklab.open_ensemble", "cracklab.register_builder", "cracklab.ensemble.run",
             "cracklab.ensemble.load_study", "cracklab.ensemble.plan", "cracklab.ensemble.open_member",

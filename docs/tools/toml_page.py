@@ -263,9 +263,10 @@ def render() -> str:
             for k, key in TOP_KEYS.items()]
     rows.append(("`[units]`", "table", "-", "the three keys below, or none", "all `\"1\"`",
                  "the units of the scene's quantities"))
-    for section in ("material", "grid", "law", "loading", "record", "numerics"):
+    for section in ("material", "grid", "law", "loading", "record", "numerics", "sequence"):
         rows.append((f"`[{section}]`", "table", "-", "below", "*required*" if section in ("material", "grid", "law")
-                     else "every key at its default", ""))
+                     else "*absent*" if section == "sequence" else "every key at its default",
+                     "a sequence of earthquakes (docs/guide/sequences.md)" if section == "sequence" else ""))
     rows.append(("`[materials.top]`, `[materials.bottom]`", "tables", "-", "the keys of `[material]`", "*absent*",
                  "the half spaces x2 > 0 and x2 < 0, instead of `[material]`; two different materials make a "
                  "bimaterial interface"))
@@ -289,6 +290,9 @@ def render() -> str:
         "record": "What the run records: grid fields at a cadence, station series (`[record.stations]`), "
                   "optionally on a sub-region (`[record.region]`).",
         "numerics": "Scheme options.",
+        "sequence": "A sequence of earthquakes and aseismic slip (docs/guide/sequences.md): the plate's loading, the "
+                    "adaptive time step and the recording cadences. Absent: one rupture at the fixed step `beta`. "
+                    "With it, `beta` and `[record]`'s `every` and `times` do not apply.",
     }
     for section in ("material", "grid"):
         lines += ["", f"## `[{section}]`", "", titles[section], ""]
@@ -298,7 +302,7 @@ def render() -> str:
               "field.", ""]
     for kind in sorted(LAWS):
         lines += law_section(kind, LAWS[kind])
-    for section in ("loading", "record", "numerics"):
+    for section in ("loading", "record", "numerics", "sequence"):
         lines += [f"## `[{section}]`", "", titles[section], ""]
         lines += key_table(section_rows(section, classes[section]))
         lines.append("")

@@ -74,7 +74,7 @@ def test_the_page_lists_every_section_and_key():
 
 
 def test_every_key_has_a_unit_kind_and_range():
-    units = {"stress", "length", "velocity", "time", "1", "-"}
+    units = {"stress", "length", "velocity", "time", "stiffness", "1", "-"}
     for section, keys in SECTION_KEYS.items():
         assert set(keys) == {f.name for f in dataclasses.fields(section_classes()[section])}, section
         for key, k in keys.items():

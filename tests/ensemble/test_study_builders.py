@@ -128,10 +128,11 @@ def test_a_member_or_an_axis_naming_an_unregistered_builder_is_refused_before_th
 
 def test_cracklab_builders_are_a_fixed_named_set():
     """scenes.BUILDERS lists exactly the public scene builders of cracklab.scenes (the
-    functions of its modules taking t_end); its other names are not builders."""
+    functions of its modules taking t_end, or years for a sequence); its other names are
+    not builders."""
     public = {n for n, f in vars(scenes).items() if inspect.isfunction(f)
-              and f.__module__.startswith(f"{scenes.__name__}.")
-              and not n.startswith("_") and "t_end" in inspect.signature(f).parameters}
+              and f.__module__.startswith(f"{scenes.__name__}.") and not n.startswith("_")
+              and {"t_end", "years"} & set(inspect.signature(f).parameters)}
     assert set(scenes.BUILDERS) == public and len(scenes.BUILDERS) == len(public)
     assert {n: w for n, w in E.registered_builders().items() if w == "cracklab"} == dict.fromkeys(
         scenes.BUILDERS, "cracklab")
@@ -275,5 +276,5 @@ def test_docs_ensembles_own_builders_example_runs(tmp_path, monkeypatch, registr
     shown_error = shown[0].strip().removeprefix("Error: ")
     names = ", ".join(sorted(E.registered_builders()))
     assert str(err.value) == shown_error.replace(
-        "asperity_row, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv101, tpv102, "
+        "asperity_row, bp1, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv101, tpv102, "
         "tpv103, tpv104, tpv3, tpv5, tpv6", names)

@@ -1,0 +1,102 @@
+"""Adaptive integration of a sequence system (quasi_dynamic.py) with an embedded pair
+(pairs.py) under a step control (control.py): each step is tried, its error estimated by
+the pair, accepted when the largest scaled error is at most 1 and retried shorter when not
+(docs/reference/equations.md, "Sequences: the time step")."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import SimulationError
+
+
+@dataclass(frozen=True)
+class Accepted:
+    """One accepted step: it ended at ``t`` with the unknowns ``y`` after a step ``dt``;
+    ``dt_next`` is the step to try next, ``rejected`` the tries this step threw away."""
+
+    n: int
+    t: float
+    y: np.ndarray
+    dt: float
+    dt_next: float
+    rejected: int
+    rates: np.ndarray       # dy/dt at (t, y): the next step's first stage
+
+
+def error_norm(system, y_new, err, tolerance):
+    """(largest scaled error, its index) of the error estimate ``err`` at the new unknowns:
+    |err| / (tolerance * scale) over the points the system integrates (system.scales)."""
+    scale, keep = system.scales(y_new)
+    ratio = np.abs(err[keep]) / (tolerance * scale[keep])
+    if ratio.size == 0:
+        return 0.0, -1
+    i = int(np.argmax(ratio)) if np.all(np.isfinite(ratio)) else int(np.flatnonzero(~np.isfinite(ratio))[0])
+    return float(ratio[i]), int(np.flatnonzero(keep)[i])
+
+
+def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, stop=None, rates=None):
+    """Accepted steps from (t0, y0) until t_end (the last step ends on it): a generator of
+    :class:`Accepted`. ``dt``: the first step to try (default ``control.dt_first``); ``n0``:
+    the number of the first step (a resumed run's); ``stop(t, y)``: True ends the run early;
+    ``rates``: dy/dt at (t0, y0) when known (a resumed run's: the same numbers as the run
+    that was stopped, whose last stage gave them).
+    A step that misses the tolerance at ``control.dt_min`` raises SimulationError naming
+    the time, the unknown and its values."""
+    A = [np.asarray(row, dtype=float) for row in pair.a]
+    b, e = np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+    t, y = float(t0), np.array(y0, dtype=float)
+    h = float(dt or control.dt_first)
+    k = [None] * pair.stages
+    k[0] = system.rates(t, y) if rates is None else np.array(rates, dtype=float)
+    n = n0
+    while t < t_end and not (stop is not None and stop(t, y)):
+        rejected = 0
+        while True:
+            last = t + h >= t_end * (1 - 1e-15) or t_end - (t + h) < control.dt_min
+            step = t_end - t if last else h
+            y_new, err, ok = _try(system, pair, A, b, e, k, t, y, step)
+            size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
+            if size <= 1.0:
+                break
+            rejected += 1
+            if step <= control.dt_min * (1 + 1e-12):
+                raise SimulationError(_failure(system, t, step, y, y_new, err, where, control.tolerance))
+            h = control.next_step(step, size, pair.order, accepted=False)
+        h_next = control.next_step(step, size, pair.order, accepted=True) if not last else h
+        t, y = (t_end if last else t + step), y_new
+        if pair.fsal:
+            k[0] = k[-1]          # the last stage ran at (t, y): system.last is the new point's
+        else:
+            k[0] = system.rates(t, y)
+        n += 1
+        yield Accepted(n, t, y, step, h_next, rejected, k[0])
+        h = h_next
+
+
+def _try(system, pair, A, b, e, k, t, y, h):
+    """(y_new, error estimate, whether every stage gave finite rates) of one step of ``h``."""
+    try:
+        for i in range(1, pair.stages):
+            yi = y + h * sum(A[i][j] * k[j] for j in range(i) if A[i][j] != 0.0)
+            k[i] = system.rates(t + pair.c[i] * h, yi)
+        if pair.fsal:
+            y_new = yi
+        else:
+            y_new = y + h * sum(b[j] * k[j] for j in range(pair.stages) if b[j] != 0.0)
+        err = h * sum(e[j] * k[j] for j in range(pair.stages) if e[j] != 0.0)
+    except (SimulationError, FloatingPointError):
+        return y, np.full_like(y, np.nan), False
+    return y_new, err, bool(np.all(np.isfinite(y_new)))
+
+
+def _failure(system, t, h, y, y_new, err, where, tolerance) -> str:
+    n = system.n
+    part, i = divmod(max(where, 0), n)
+    names = [f"slip delta_{c}" for c in system.comps] + ["state psi"]
+    node = tuple(int(v) for v in np.unravel_index(i, system.grid.shape))
+    return (f"the step cannot meet its tolerance {tolerance:g} at the smallest step allowed, dt_min = {h:.3g} s: at "
+            f"t = {t:.9g} s, node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}), "
+            f"{names[min(part, len(names) - 1)]} = {y[where]:.6g} -> {y_new[where]:.6g}, error estimate "
+            f"{err[where]:.3g}; loosen numerics.tolerance or lower numerics.dt_min")

@@ -1,0 +1,99 @@
+"""A sequence scene's run: the quasi-dynamic system of the scene (quasi_dynamic.py), its
+step control and pair, stepped by :func:`integrate.integrate`, resumable from its state."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .control import StepControl
+from .integrate import integrate
+from .pairs import PAIRS
+from .quasi_dynamic import QuasiDynamic
+
+
+@dataclass(frozen=True)
+class SequenceState:
+    """After accepted step ``n`` (time ``t``, reached by a step ``dt``): the fields over the
+    grid, {component: array} for ``delta``, ``v``, ``tau``; ``psi`` and the slip rate
+    magnitude ``V``."""
+
+    n: int
+    t: float
+    dt: float
+    delta: dict
+    v: dict
+    tau: dict
+    psi: np.ndarray
+    V: np.ndarray
+
+
+def system_of(scene, transforms=None) -> QuasiDynamic:
+    """The quasi-dynamic system of a sequence scene."""
+    seq, law, grid = scene.sequence, scene.law, scene.grid
+    comps = sorted({c for c in scene.components if c in (1, 3)} | set(seq.plate))
+    tau0 = {c: scene.loading.field(c) for c in comps}
+    if law.sigma_n is not None:
+        sigma = law.sigma_n
+    else:
+        sigma = np.maximum(0.0, -np.asarray(scene.loading.field(2), dtype=float))
+    plate = {c: {1: seq.plate_rate_1, 3: seq.plate_rate_3}[c] for c in comps}
+    return QuasiDynamic(scene.material, grid, law, tau0, sigma, plate, creep=seq.creep, stiffness=seq.stiffness,
+                        transforms=transforms)
+
+
+class SequenceRun:
+    """Iterate for the :class:`SequenceState` after each accepted step of ``scene`` (its
+    ``sequence`` set), from t = 0 or from ``start`` (a dict of :meth:`get_state`)."""
+
+    def __init__(self, scene, start=None):
+        self.scene = scene
+        seq = scene.sequence
+        self.system = system_of(scene)
+        dx = scene.grid.dx1 if scene.grid.plane else min(scene.grid.dx1, scene.grid.dx3)
+        dt_min, dt_max, dt_first = seq.steps(dx, scene.material.cs, scene.t_end)
+        self.control = StepControl(tolerance=seq.tolerance, dt_min=dt_min, dt_max=dt_max, dt_first=dt_first)
+        self.pair = PAIRS[seq.pair]
+        self.n, self.t, self.dt_next = 0, 0.0, dt_first
+        self.y = self.system.initial()
+        self.rates = None       # dy/dt at (t, y), from the last accepted step
+        if start is not None:
+            self.set_state(start)
+
+    def get_state(self) -> dict:
+        lnV = self.system.lnV
+        return {"n": self.n, "t": self.t, "dt_next": self.dt_next, "y": self.y.copy(),
+                "lnV": None if lnV is None else lnV.copy(),
+                "rates": None if self.rates is None else self.rates.copy(),
+                "last": None if self.system.last is None else list(self.system.last)}
+
+    def set_state(self, state: dict) -> None:
+        self.n, self.t, self.dt_next = int(state["n"]), float(state["t"]), float(state["dt_next"])
+        self.y = np.array(state["y"], dtype=float)
+        self.system.lnV = None if state["lnV"] is None else np.array(state["lnV"], dtype=float)
+        self.rates = None if state["rates"] is None else np.array(state["rates"], dtype=float)
+        last = state.get("last")
+        self.system.last = None if last is None else (np.array(last[0]), {int(c): np.array(a) for c, a in
+                                                                          last[1].items()},
+                                                      {int(c): np.array(a) for c, a in last[2].items()})
+
+    def state(self, dt=0.0) -> SequenceState:
+        """The fields at the current point (the system's last evaluation is at it)."""
+        sysm = self.system
+        if sysm.last is None:
+            sysm.rates(self.t, self.y)
+        V, tau, v = sysm.last
+        delta, psi = sysm.split(self.y)
+        shape = self.scene.grid.shape
+        grid = {name: {c: x[c].reshape(shape) for c in sysm.comps} for name, x in
+                (("delta", delta), ("v", v), ("tau", tau))}
+        return SequenceState(self.n, self.t, dt, grid["delta"], grid["v"], grid["tau"], psi.reshape(shape),
+                             V.reshape(shape))
+
+    def __iter__(self):
+        if self.n == 0:
+            yield self.state()
+        for acc in integrate(self.system, self.y, self.t, self.scene.t_end, self.pair, self.control,
+                             dt=self.dt_next, n0=self.n, rates=self.rates):
+            self.n, self.t, self.y, self.dt_next, self.rates = acc.n, acc.t, acc.y, acc.dt_next, acc.rates
+            yield self.state(acc.dt)

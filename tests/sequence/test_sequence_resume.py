@@ -1,0 +1,95 @@
+"""Nothing lost in a sequence (issue 35, verification 5): a `cracklab run` of a sequence
+streams to its store and checkpoints; kill -9 at any point and resume gives the run's
+numbers bit for bit; the store holds what the in-memory run returns."""
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import xarray as xr
+
+from spring_slider import scene as spring_slider
+
+
+def _start(toml, out, *args, sleep=None):
+    env = dict(os.environ)
+    if sleep:
+        env["CRACKLAB_TEST_CHECKPOINT_SLEEP"] = str(sleep)     # each checkpoint write lingers
+    return subprocess.Popen([sys.executable, "-m", "cracklab.cli", "run", str(toml), "-o", str(out), *args],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+
+
+def _checkpoint_n(out):
+    from cracklab.output import checkpoint
+
+    try:
+        ck = checkpoint.read(out)
+    except Exception:
+        return None
+    return None if ck is None else int(ck["run"]["n"])
+
+
+def _same(a, b):
+    assert set(a.variables) == set(b.variables)
+    for name in a.variables:
+        x, y = a[name].values, b[name].values
+        assert x.shape == y.shape, name
+        if x.dtype.kind == "f":
+            assert np.array_equal(x, y, equal_nan=True), name
+        else:
+            assert (x == y).all(), name
+    assert a.attrs["accepted_steps"] == b.attrs["accepted_steps"]
+
+
+def test_the_store_holds_the_in_memory_run_and_verifies(tmp_path):
+    import shutil
+
+    import cracklab
+    from cracklab.output.verify import verify
+
+    scene = spring_slider(4e8)
+    store = tmp_path / "s.zarr"
+    _same(cracklab.simulate(scene, store=store, checkpoint_every=100).load(), cracklab.simulate(scene))
+    report = verify(store)
+    assert report.ok and report.chunks > 100, report.first()
+    shutil.rmtree(store / "max_slip_rate" / "c")           # a lost array's chunks are damage
+    assert not verify(store).ok
+
+
+def test_kill_9_and_resume_is_bit_identical(tmp_path):
+    scene = spring_slider(1.2e9)
+    toml = tmp_path / "slider.toml"
+    scene.to_toml(toml)
+    ref_proc = _start(toml, tmp_path / "ref.zarr")
+    _, err = ref_proc.communicate(timeout=300)
+    assert ref_proc.returncode == 0, err.decode()[-2000:]
+    ref = xr.open_zarr(tmp_path / "ref.zarr").load()
+    out = tmp_path / "out.zarr"
+    last, rng = -1, np.random.default_rng(1)
+    for attempt in range(2):
+        proc = _start(toml, out, "--checkpoint-every", "150", *(["--resume"] if attempt else []), sleep=0.3)
+        deadline = time.monotonic() + 120
+        while (_checkpoint_n(out) or -1) <= last and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert proc.poll() is None, proc.communicate()[1].decode()[-2000:]
+        time.sleep(rng.uniform(0.0, 0.4))         # after a checkpoint, or in the middle of the next write
+        proc.send_signal(signal.SIGKILL)
+        assert proc.wait() == -signal.SIGKILL
+        last = _checkpoint_n(out)
+        assert last is not None and 0 < last < ref.attrs["accepted_steps"]
+    proc = _start(toml, out, "--resume")
+    outs, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err.decode()[-2000:]
+    assert f"resumed after accepted step {last}," in (outs + err).decode()     # not started over
+    res = xr.open_zarr(out).load()
+    assert res.attrs["cracklab_resumed_from"] == last
+    _same(res, ref)
+    # a complete store of the scene is served as it is, not run again
+    proc = _start(toml, out, "--resume")
+    outs, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0 and "nothing to do" in (outs + err).decode(), err.decode()[-2000:]
+    served = xr.open_zarr(out).load()
+    assert served.attrs["cracklab_resumed_from"] == last          # the same store: not run again
+    _same(served, ref)
