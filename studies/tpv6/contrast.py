@@ -124,6 +124,8 @@ def richardson(h, y):
     if d1 == 0 or d2 == 0 or d1 * d2 < 0 or abs(d2) >= abs(d1):
         return None, None
     p = np.log2(d1 / d2)
+    if p < 0.5:                 # the changes barely shrink: an extrapolation would mean nothing
+        return None, None
     return y[2] - d2 / (2**p - 1), p
 
 
@@ -209,16 +211,17 @@ def findings(rows, domain) -> list[str]:
         parts = []
         for side, group in (("-x", minus), ("+x", PLUS_X)):
             ch = [max(abs(b["stations"][st] / a["stations"][st] - 1) for st in group) for a, b in zip(sel, sel[1:])]
-            trend = "shrink" if all(y < x for x, y in zip(ch, ch[1:])) else "do not shrink"
+            trend = "shrink" if all(y < 0.7 * x for x, y in zip(ch, ch[1:])) else "do not shrink"
             parts.append(f"on the {side} side the changes from one spacing to the next are "
                          + ", ".join(f"{100 * c:.1f} %" for c in ch) + f" down to {sel[-1]['dx']:g} m ({trend})")
         out.append(f"- {name}: " + "; ".join(parts) + ".")
-    out.append("- So the -x side converges once the normal stress is regularised, and the +x side (the direction the "
-               "compliant side moves, where the peak slip rate grows to 45 m/s at 100 m, issue 34) has not "
-               "converged at the finest spacing run: its final slip still changes by a few per cent from one "
-               "spacing to the next, more with the smaller L* and most with the law as stated (Coulomb friction "
-               "between different materials is ill-posed). Its excess over the independent code at 100 m is of "
-               "this size, and the cell has no part in it (above).")
+    out.append("- So the +x side's final slip (the direction the compliant side moves, where the peak slip rate grows "
+               "to 45 m/s at 100 m, issue 34) does not converge at these spacings: it grows by several per cent at "
+               "each halving down to the finest run, with the law as stated (Coulomb friction between different "
+               "materials is ill-posed) and with L* = 0.1 m; with L* = 0.4 m its changes are smaller but not yet "
+               "shrinking. Its limit cannot be given from these runs, and its excess over the independent code at "
+               "100 m is of the size of these changes; the cell has no part in it (above). The -x side changes by "
+               "about 1 % per halving once the normal stress is regularised.")
     return out
 
 
