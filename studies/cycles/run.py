@@ -20,6 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
+from studies.benchmarks import harness as H
+
 ROOT = Path(__file__).resolve().parents[2]
 YEAR = 365.0 * 24.0 * 3600.0
 
@@ -122,10 +124,9 @@ def analyse(out, dzs) -> dict:
 
 
 def fig_profiles(out, dz, figdir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import xarray as xr
+
+    plt = H.pyplot()
 
     ds = xr.open_zarr(store_of(out, dz))
     shallow = ds.x1.values <= 45e3                  # the frictional fault (40 km) and a little creep
@@ -139,11 +140,7 @@ def fig_profiles(out, dz, figdir):
     ax.set(xlabel="cumulative slip (m)", ylabel="depth (km)",
            title=f"BP1-QD, dz = {dz:g} m: slip every 5 years (blue) and every second during events (red)")
     ax.title.set_fontsize(9)
-    fig.tight_layout()
-    path = Path(figdir) / f"cycles_bp1_profiles_dz{dz:g}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return H.save(fig, Path(figdir) / f"cycles_bp1_profiles_dz{dz:g}.png", 110)
 
 
 #: BICyclE's BP1-QD earthquakes at 7.5 km (years), read off the plot of the SEAS platform's
@@ -154,10 +151,9 @@ BICYCLE_YR = (198.0, 275.0, 353.0, 432.0, 510.0, 588.0, 667.0)
 def fig_station(out, dz, figdir):
     """Shear stress and log10 slip rate at fltst_dp075 (and the slip rate at the surface)
     over the first 700 years: the figure the SEAS comparisons show."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import xarray as xr
+
+    plt = H.pyplot()
 
     ds = xr.open_zarr(store_of(out, dz))
     t = ds.t_station.values / YEAR
@@ -175,18 +171,13 @@ def fig_station(out, dz, figdir):
     ax[1].legend(fontsize=8, loc="lower right")
     for a in ax:
         a.title.set_fontsize(9)
-    fig.tight_layout()
-    path = Path(figdir) / f"cycles_bp1_station_dz{dz:g}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return H.save(fig, Path(figdir) / f"cycles_bp1_station_dz{dz:g}.png", 110)
 
 
 def fig_max_rate(out, dzs, figdir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import xarray as xr
+
+    plt = H.pyplot()
 
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for dz in dzs:
@@ -194,11 +185,7 @@ def fig_max_rate(out, dzs, figdir):
         ax.semilogy(ds.t_station.values / YEAR, ds.max_slip_rate.values, lw=0.8, label=f"dz = {dz:g} m")
     ax.set(xlabel="time (years)", ylabel="largest slip rate (m/s)", title="BP1-QD: largest slip rate on the fault")
     ax.legend()
-    fig.tight_layout()
-    path = Path(figdir) / "cycles_bp1_max_slip_rate.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return H.save(fig, Path(figdir) / "cycles_bp1_max_slip_rate.png", 110)
 
 
 def write_page(res, dzs, page, figs, command):

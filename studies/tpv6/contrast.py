@@ -228,10 +228,7 @@ def findings(rows, domain) -> list[str]:
 def figure(rows, domain, path) -> Path:
     """Final slip against the grid spacing at the +x stations and at faultst-120dp000, per
     law setting, on the ``domain`` cell at TPV7's contrast."""
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = H.pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.4), sharey=False)
     for ax, st in zip(axes, PLUS_X + ("faultst-120dp000",)):
         for L in sorted({r["normal_slip_scale"] or 0.0 for r in rows}):
@@ -248,11 +245,8 @@ def figure(rows, domain, path) -> Path:
         ax.set(title=st + (" (+x)" if st in PLUS_X else ""), xlabel="dx (m)", ylabel="final slip (m)")
         ax.title.set_fontsize(9)
     axes[0].legend(fontsize=8)
-    fig.tight_layout()
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return Path(path)
+    return H.save(fig, path, 110)
 
 
 def report(args) -> int:
