@@ -26,6 +26,7 @@ SLOW = frozenset({
     "tests/scenes/test_tpv_rate_state.py::test_a_coarse_half_space_run_nucleates",
     "tests/scenes/test_tpv5.py::test_tpv5_coarse_run_starts_at_the_hypocentre_and_keeps_the_surface_free",
     # ensembles on worker processes, killed workers and sweeps
+    "tests/sequence/test_sequence_ensemble.py::test_a_sweep_of_bp1_gives_a_tidy_event_table",
     "tests/ensemble/test_ensemble_faults.py::test_worker_killed_mid_member_is_retried_or_marked_failed_then_resumed",
     "tests/ensemble/test_ensemble_faults.py::test_sweep_killed_leaves_a_stale_lock_that_the_next_sweep_takes_over",
     "tests/ensemble/test_ensemble_faults.py::test_two_sweeps_into_one_store_the_second_is_refused",
@@ -34,6 +35,7 @@ SLOW = frozenset({
     # the command line in fresh processes (each starts Python, cracklab and often dask)
     "tests/cli/test_cli_manners.py",
     # killed runs resumed, in fresh processes
+    "tests/sequence/test_sequence_resume.py::test_kill_9_and_resume_is_bit_identical",
     "tests/output/test_resume.py::test_sigkill_mid_run_then_resume",
     "tests/output/test_resume.py::test_sigkill_inside_a_checkpoint_write",
     "tests/output/test_store_integrity.py::test_kill_during_the_final_write_leaves_a_store_not_complete",
@@ -51,6 +53,8 @@ SLOW = frozenset({
     "tests/solver/test_face_fields.py::test_faces_differ_by_the_jump_at_snapshots_and_stations",
     "tests/solver/test_product2.py::test_bimaterial_pair_runs_product2",
     # rate-and-state runs (a Newton solve per point and step)
+    "tests/sequence/test_spring_slider.py::test_the_error_follows_the_tolerance",
+    "tests/scenes/test_tpv6.py::test_the_default_domain_keeps_the_periodic_images_under_half_a_percent",
     "tests/laws/test_rate_state.py::test_psi_is_recorded_by_name_with_its_unit",
     "tests/laws/test_rate_state.py::test_following_the_normal_traction_is_the_constant_sigma_n_run",
     "tests/laws/test_rate_state.py::test_a_resumed_run_is_the_uninterrupted_run",

@@ -5,9 +5,8 @@ the crack length of the failed area and the rupture statistics (``rupture``;
 :func:`failed_length` with :func:`cell_area_and_width` is the one definition the
 constant-K load of a run, the energy budget and :func:`crack_length` use), the summary
 table of an ensemble (``table``), the views of one member (``members``) and the event
-catalogue of a sequence run (``events``, of one run for now). Every other function takes a
-single run or an ensemble (``cracklab.open_ensemble``) and, on an ensemble, returns its
-results along ``member``.
+catalogue of a sequence run (``events``). Every function takes a single run or an ensemble
+(``cracklab.open_ensemble``) and, on an ensemble, returns its results along ``member``.
 Also: the energy budget (``energy``), the single-mode problem (``modal``) and exact
 solutions (``exact``).
 """

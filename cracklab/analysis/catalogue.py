@@ -10,8 +10,10 @@ def events(ds) -> xr.Dataset:
     rate crossing ``event_threshold`` up and down), duration, hypocentre (x1, x3 of the
     largest slip rate at the start), peak slip rate and its time, mean slip and rupture
     area (the points whose slip rate exceeded the threshold) and moment (per unit length in
-    2D). An ensemble's members (a ``member`` dimension) keep it: ``.to_dataframe()`` gives
-    the tidy table."""
+    2D). On an ensemble (``cracklab.open_ensemble``) the catalogue is on (member, event),
+    each member's padded with NaN after its last event:
+    ``events(ens).to_dataframe().dropna(subset=["t_start"])`` is the tidy table of every
+    member's events with the swept parameters."""
     if "event" not in ds.dims:
         raise ValueError("this Dataset has no event dimension: it is not the output of a sequence run "
                          "(a Scene with sequence set)")

@@ -123,6 +123,27 @@ def analyse(out, dzs) -> dict:
     return res
 
 
+def analyse_ensemble(store) -> dict:
+    """Per member of an ensemble of BP1 sequences (studies/cycles/ensemble.toml): its swept
+    parameters, its earthquakes' start times, recurrence and largest slip rates, from the
+    tidy table of ``analysis.events``."""
+    import cracklab
+
+    ens = cracklab.open_ensemble(store)
+    swept = [c for c in ens.coords if ens[c].dims == ("member",) and c not in ("member", "status", "scene_name")]
+    table = cracklab.analysis.events(ens).to_dataframe().dropna(subset=["t_start"]).reset_index()
+    out = {"swept": swept, "members": []}
+    for mid, rows in table.groupby("member", sort=False):
+        quakes = earthquakes(rows["t_start"].values)
+        out["members"].append({"member": str(mid), **{c: float(ens[c].sel(member=mid)) for c in swept},
+                               "events": int(len(rows)), "earthquakes_yr": (np.array(quakes) / YEAR).tolist(),
+                               "recurrence_yr": (np.diff(quakes) / YEAR).tolist(),
+                               "peak_slip_rate": float(rows["peak_slip_rate"].max()),
+                               "mean_slip": float(rows["mean_slip"].mean())})
+    out["rows"] = int(len(table))
+    return out
+
+
 def fig_profiles(out, dz, figdir):
     import xarray as xr
 
@@ -272,6 +293,22 @@ def write_page(res, dzs, page, figs, command):
               "some of them stopping at depth and restarting within hours; the description's ~5 m/s is for every "
               "earthquake. A 25 m run and the platform's station data (not on this machine) would tell whether "
               "this is resolution or the description's round figure.", ""]
+    if res.get("ensemble"):
+        e = res["ensemble"]
+        lines += ["## An ensemble of sequences", "",
+                  "`cracklab sweep studies/cycles/ensemble.toml` runs BP1-QD with the velocity-weakening zone "
+                  "reaching 10, 12.5 and 15 km (dz = 200 m, 600 years) into one store; "
+                  "`cracklab.analysis.events(cracklab.open_ensemble(store)).to_dataframe().dropna(subset=['t_start'])` "
+                  f"is the tidy table of every member's events ({e['rows']} rows here). Per member:", "",
+                  "| " + " | ".join(e["swept"]) + " | events | earthquakes | first (yr) | mean recurrence (yr) | "
+                  "largest slip rate (m/s) | mean slip per event (m) |",
+                  "|---" * (len(e["swept"]) + 6) + "|"]
+        for m in e["members"]:
+            rec = f"{np.mean(m['recurrence_yr']):.1f}" if m["recurrence_yr"] else "-"
+            lines.append("| " + " | ".join(f"{m[c]:g}" for c in e["swept"]) + f" | {m['events']} | "
+                         f"{len(m['earthquakes_yr'])} | {m['earthquakes_yr'][0]:.1f} | {rec} | "
+                         f"{m['peak_slip_rate']:.2f} | {m['mean_slip']:.2f} |")
+        lines.append("")
     lines += ["## Figures", ""] + [f"![{Path(f).stem}]({f})" for f in figs] + [""]
     page.write_text("\n".join(lines))
 
@@ -284,6 +321,8 @@ def main(argv=None) -> int:
     p.add_argument("--tolerance", type=float, default=1e-7)
     p.add_argument("--report-only", action="store_true")
     p.add_argument("--force", action="store_true")
+    p.add_argument("--ensemble", default=None, help="the store of `cracklab sweep studies/cycles/ensemble.toml`, "
+                                                    "for the page's section on it")
     p.add_argument("--page", default=str(ROOT / "docs" / "studies" / "cycles.md"))
     p.add_argument("--figures", default=str(ROOT / "docs" / "figures"))
     args = p.parse_args(argv)
@@ -293,7 +332,11 @@ def main(argv=None) -> int:
         for dz in args.dz:
             run_one(out, dz, args.years, args.tolerance, force=args.force)
     res = analyse(out, args.dz)
+    if args.ensemble:
+        res["ensemble"] = analyse_ensemble(args.ensemble)
     res["domain"] = run_domain(out) if not args.report_only or (out / "domain_depth80km.json").exists() else {}
+    if args.ensemble:
+        res["ensemble"] = analyse_ensemble(args.ensemble)
     (out / "cycles_results.json").write_text(json.dumps(res, indent=1))
     figdir = Path(args.figures)
     figdir.mkdir(parents=True, exist_ok=True)
