@@ -120,9 +120,7 @@ class Sequence:
         not a bound (the number of events and of accepted steps are the run's own):
         twice the slow cadence's count (as many fast snapshots as slow), and ``STEPS_ESTIMATE``
         accepted steps."""
-        grid = scene.grid
-        dx = grid.dx1 if grid.plane else min(grid.dx1, grid.dx3)
-        slow, _ = self.intervals(dx, scene.material.cs, scene.t_end)
+        slow, _ = self.intervals(scene.grid.dx_min, scene.material.cs, scene.t_end)
         nsnap = 2 * (int(scene.t_end / slow) + 1) if scene.record.fields else 0
         return nsnap, STEPS_ESTIMATE // self.station_every + 1
 

@@ -3,10 +3,7 @@ embedded pair, bounds on the step, and the next step from the last error (the st
 controller, Hairer, Norsett & Wanner 1993, II.4)."""
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-
-from ...errors import InputError
 
 SAFETY = 0.9
 GROW = 5.0          # at most this factor up after an accepted step
@@ -17,26 +14,13 @@ SHRINK = 0.2        # at most this factor down after a rejected one
 class StepControl:
     """``tolerance``: the relative error allowed per step (slip against L + |slip|, state
     against a); ``dt_min``, ``dt_max``: bounds on the step (s; a step that cannot meet the
-    tolerance at ``dt_min`` stops the run); ``dt_first``: the first step tried."""
+    tolerance at ``dt_min`` stops the run); ``dt_first``: the first step tried. Their values
+    come from a Scene's ``Sequence``, which checked them (``Sequence.steps``)."""
 
     tolerance: float = 1e-7
     dt_min: float = 1e-8
     dt_max: float = 3.15e7
     dt_first: float = 1e-3
-
-    def __post_init__(self):
-        for name in ("tolerance", "dt_min", "dt_max", "dt_first"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise InputError(f"numerics.{name}", f"must be a finite number > 0, got {v!r}")
-        if self.tolerance >= 1:
-            raise InputError("numerics.tolerance", f"must be < 1 (a relative error per step), got {self.tolerance!r}")
-        if self.dt_min > self.dt_max:
-            raise InputError("numerics.dt_min", f"must be <= numerics.dt_max, got dt_min = {self.dt_min!r} > "
-                                                f"dt_max = {self.dt_max!r}")
-        if not self.dt_min <= self.dt_first <= self.dt_max:
-            raise InputError("numerics.dt_first", f"must lie in [dt_min, dt_max] = [{self.dt_min!r}, "
-                                                  f"{self.dt_max!r}], got {self.dt_first!r}")
 
     def next_step(self, dt: float, error: float, order: int, accepted: bool) -> float:
         """The step after one of length ``dt`` whose scaled error is ``error`` (1: at the

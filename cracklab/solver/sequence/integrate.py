@@ -36,12 +36,12 @@ def error_norm(system, y_new, err, tolerance):
     return float(ratio[i]), int(np.flatnonzero(keep)[i])
 
 
-def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, stop=None, rates=None):
+def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None):
     """Accepted steps from (t0, y0) until t_end (the last step ends on it): a generator of
     :class:`Accepted`. ``dt``: the first step to try (default ``control.dt_first``); ``n0``:
-    the number of the first step (a resumed run's); ``stop(t, y)``: True ends the run early;
-    ``rates``: dy/dt at (t0, y0) when known (a resumed run's: the same numbers as the run
-    that was stopped, whose last stage gave them).
+    the number of the first step (a resumed run's); ``rates``: dy/dt at (t0, y0) when known
+    (a resumed run's: the same numbers as the run that was stopped, whose last stage gave
+    them).
     A step that misses the tolerance at ``control.dt_min`` raises SimulationError naming
     the time, the unknown and its values."""
     A = [np.asarray(row, dtype=float) for row in pair.a]
@@ -51,7 +51,7 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, stop=None,
     k = [None] * pair.stages
     k[0] = system.rates(t, y) if rates is None else np.array(rates, dtype=float)
     n = n0
-    while t < t_end and not (stop is not None and stop(t, y)):
+    while t < t_end:
         rejected = 0
         while True:
             last = t + h >= t_end * (1 - 1e-15) or t_end - (t + h) < control.dt_min
@@ -99,4 +99,4 @@ def _failure(system, t, h, y, y_new, err, where, tolerance) -> str:
     return (f"the step cannot meet its tolerance {tolerance:g} at the smallest step allowed, dt_min = {h:.3g} s: at "
             f"t = {t:.9g} s, node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}), "
             f"{names[min(part, len(names) - 1)]} = {y[where]:.6g} -> {y_new[where]:.6g}, error estimate "
-            f"{err[where]:.3g}; loosen numerics.tolerance or lower numerics.dt_min")
+            f"{err[where]:.3g}; loosen sequence.tolerance or lower sequence.dt_min")

@@ -22,36 +22,20 @@ class QuasiDynamic:
     ({component: field or number}, the shear load), ``sigma`` (compressive normal stress,
     field or number), ``plate`` ({component: V_p >= 0} of every slipping shear component),
     ``creep`` (mask of the creeping region, or None), ``stiffness`` (the spring on the mean
-    slip, stress per length)."""
+    slip, stress per length): the values of a Scene, which checked them (model/sequence.py,
+    ``Sequence.check_scene``; ``system_of`` in run.py builds the system of a scene)."""
 
     def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None):
-        if not getattr(law, "heals", False):
-            raise InputError("law.kind", f"a sequence needs a law whose strength heals (rate_state); "
-                                         f"{type(law).__name__} cannot heal, so no cycles are possible")
         comps = tuple(sorted(plate))
-        if not comps or any(c not in (1, 3) for c in comps):
-            raise InputError("sequence.plate_rate_1", f"must load the shear components 1 and/or 3, got {sorted(plate)}")
-        for c, vp in plate.items():
-            if not (np.isfinite(vp) and vp >= 0):
-                raise InputError(f"sequence.plate_rate_{c}", f"must be a finite number >= 0, got {vp!r}")
-        if not any(v > 0 for v in plate.values()):
-            raise InputError("sequence.plate_rate_1", "the plate rate must be > 0 along at least one component")
         shape = grid.shape
         self.grid, self.law, self.comps = grid, law, comps
         self.n = int(np.prod(shape))
         self.plate = {c: float(v) for c, v in plate.items()}
         bonded = np.zeros(shape, bool) if law.bonded is None else np.broadcast_to(np.asarray(law.bonded, bool), shape)
         creep = np.zeros(shape, bool) if creep is None else np.broadcast_to(np.asarray(creep, bool), shape)
-        if creep.shape != shape:
-            raise InputError("sequence.creep", f"must be a mask of the grid's shape {shape}, got {creep.shape}")
         self.creep = creep.ravel()
         self.slides = (~bonded & ~creep).ravel()
-        if not self.slides.any():
-            raise InputError("sequence.creep", "covers the whole frictional plane: no point is left to slide "
-                                              "under rate-and-state friction")
         self.stiffness = float(stiffness)
-        if not (np.isfinite(self.stiffness) and self.stiffness >= 0):
-            raise InputError("sequence.stiffness", f"must be a finite number >= 0, got {stiffness!r}")
         self.static = StaticResponse(material, grid, comps, stiffness=self.stiffness, transforms=transforms)
         self.eta = material.eta(comps[0])
         self.tau0 = {c: np.broadcast_to(np.asarray(tau0.get(c, 0.0), dtype=float), shape).ravel() for c in comps}
@@ -60,6 +44,10 @@ class QuasiDynamic:
             raise InputError("law.sigma_n", "must be finite and > 0 (compressive) where the plane slides")
         self.sigma_s = np.ascontiguousarray(self.sigma[self.slides])
         self.plate_speed = float(np.sqrt(sum(v * v for v in self.plate.values())))
+        # the error scales (``scales``): L and a at every point, and the points integrated
+        self._L, self._a = (np.broadcast_to(np.asarray(getattr(law, name), dtype=float), shape).ravel()
+                            for name in ("L", "a"))
+        self._keep = np.concatenate([self.slides] * (len(comps) + 1))
         self.lnV = None     # the last solve's ln V: Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -74,13 +62,7 @@ class QuasiDynamic:
         T = np.sqrt(sum(self.tau0[c] ** 2 for c in self.comps))
         shape = self.grid.shape
         psi = self.law.initial_state(T.reshape(shape), self.sigma.reshape(shape), self.eta).ravel().astype(float)
-        psi[~self.slides] = 0.0
-        if not np.all(np.isfinite(psi[self.slides])):
-            i = int(np.flatnonzero(self.slides & ~np.isfinite(psi))[0])
-            raise InputError("law.V_ini", f"gives no initial state at point {i}: the load at t = 0, |tau0| = "
-                                          f"{T[i]:g}, must exceed eta V_ini = "
-                                          f"{self.eta * np.ravel(self.law.V_ini)[0]:g} "
-                                          f"under compression")
+        psi[~self.slides] = 0.0     # a Scene's load slides at V_ini where it slides (RateState.check_scene)
         return np.concatenate([np.zeros(self.n * len(self.comps)), psi])
 
     def traction(self, t, y):
@@ -120,9 +102,5 @@ class QuasiDynamic:
     def scales(self, y):
         """The error scale of each unknown relative to the tolerance: slip against L + |slip|,
         state against a (an error of a in psi is a factor e in V)."""
-        delta, psi = self.split(y)
-        L = np.broadcast_to(np.asarray(self.law.L, dtype=float), self.grid.shape).ravel()
-        a = np.broadcast_to(np.asarray(self.law.a, dtype=float), self.grid.shape).ravel()
-        sc = np.concatenate([L + np.abs(delta[c]) for c in self.comps] + [a])
-        keep = np.concatenate([self.slides] * (len(self.comps) + 1))
-        return sc, keep
+        delta, _ = self.split(y)
+        return np.concatenate([self._L + np.abs(delta[c]) for c in self.comps] + [self._a]), self._keep

@@ -50,8 +50,7 @@ class SequenceRun:
         self.scene = scene
         seq = scene.sequence
         self.system = system_of(scene)
-        dx = scene.grid.dx1 if scene.grid.plane else min(scene.grid.dx1, scene.grid.dx3)
-        dt_min, dt_max, dt_first = seq.steps(dx, scene.material.cs, scene.t_end)
+        dt_min, dt_max, dt_first = seq.steps(scene.grid.dx_min, scene.material.cs, scene.t_end)
         self.control = StepControl(tolerance=seq.tolerance, dt_min=dt_min, dt_max=dt_max, dt_first=dt_first)
         self.pair = PAIRS[seq.pair]
         self.n, self.t, self.dt_next = 0, 0.0, dt_first
