@@ -156,7 +156,7 @@ class Law:
     state_variables: dict = {}
     #: whether the law heals (its strength recovers at rest): only such a law has cycles, and
     #: a sequence solver (cracklab.solver.sequence) takes only it; it then writes
-    #: ``slip_rate``, ``state_rate`` and ``initial_state`` (laws/rate_state.py)
+    #: ``slide_rates`` and ``initial_state`` (laws/rate_state.py)
     heals = False
 
     @classmethod

@@ -750,12 +750,6 @@ hypocentre = [19200.0, 9600.0]
         return v, {c: tau[c] for c in v}
 
     # -- the sequence solvers' protocol (cracklab.solver.sequence)
-    def _at_points(self, name, at):
-        """The parameter ``name`` as a number, or its field flattened and taken at the flat
-        mask or indices ``at`` (None: every point)."""
-        v = np.asarray(getattr(self, name), dtype=float)
-        return v if v.ndim == 0 or at is None else v.ravel()[at]
-
     def slide_rates(self, T, psi, sigma, eta, guess=None, at=None):
         """The slip rate V >= 0 with T - eta V = sigma f(V, psi) at every point (docs/reference/
         equations.md, "Rate-and-state friction") and the state's rate dpsi/dt at it, from the
@@ -785,31 +779,21 @@ hypocentre = [19200.0, 9600.0]
         return V, lnV, dpsi
 
     def _points(self, at, n):
-        """(array, stride) pairs of a, b, V0, L, f0, f_w, V_w at the points ``at`` (cached)."""
+        """(array, stride) pairs of a, b, V0, L, f0, f_w, V_w at the ``n`` points ``at`` (a
+        flat mask of the grid; None: every point), as ``_flat`` gives them; kept for the
+        mask of the last call (a sequence's system passes one mask every time)."""
         last = self._cache.get("points")
-        if last is not None and last[0] is at and last[1] == n:     # the same mask as the last call
+        if last is not None and last[0] is at and last[1] == n:
             return last[2]
-        key = ("points", n, None if at is None else hash(np.asarray(at).tobytes()))
-        if key not in self._cache:
-            out = []
-            for name, missing in (("a", None), ("b", None), ("V0", None), ("L", None), ("f0", None), ("f_w", 0.0),
-                                  ("V_w", 1.0)):
-                v = getattr(self, name)
-                arr = np.asarray(missing if v is None else v, dtype=float)
-                if arr.ndim == 0 or arr.size == 1:
-                    out += [arr.reshape(1).copy(), 0]
-                else:
-                    arr = arr.ravel() if at is None else arr.ravel()[at]
-                    out += [np.ascontiguousarray(arr), 1]
-            self._cache[key] = tuple(out)
-        self._cache["points"] = (at, n, self._cache[key])
-        return self._cache[key]
-
-    def slip_rate(self, T, psi, sigma, eta, guess=None, at=None):
-        """(V, ln V) of :meth:`slide_rates`, in T's shape."""
-        shape = np.shape(T)
-        V, lnV, _ = self.slide_rates(T, psi, sigma, eta, guess, at)
-        return V.reshape(shape), lnV.reshape(shape)
+        full = (n,) if at is None else (np.size(at),)
+        out = []
+        for name, missing in (("a", None), ("b", None), ("V0", None), ("L", None), ("f0", None), ("f_w", 0.0),
+                              ("V_w", 1.0)):
+            v = getattr(self, name)
+            arr, stride = _flat(np.ravel(missing if v is None else v), full)
+            out += [np.ascontiguousarray(arr[at]) if stride and at is not None else arr, stride]
+        self._cache["points"] = (at, n, tuple(out))
+        return self._cache["points"][2]
 
     def initial_state(self, T, sigma, eta):
         """psi at t = 0 over the grid: ``psi_ini``, or the state at which the plane slides at
@@ -822,32 +806,6 @@ hypocentre = [19200.0, 9600.0]
         with np.errstate(divide="ignore", invalid="ignore"):
             lnsinh = np.where(y > 20.0, y - LN2, np.log(np.sinh(np.minimum(y, 20.0))))
         return np.array(np.broadcast_to(a * (np.log(2.0 * V0 / Vi) + lnsinh), T.shape))
-
-    def steady_state(self, V, at=None):
-        """psi_ss(V), the state at which f(V, psi_ss) = f_ss(V) (module docstring); ``at`` as
-        for :meth:`slip_rate`."""
-        V = np.asarray(V, dtype=float)
-        a, b, V0, f0 = (self._at_points(n, at) for n in ("a", "b", "V0", "f0"))
-        lnv = np.log(V / V0)
-        fss = f0 - (b - a) * lnv
-        if self.f_w is not None:
-            fw, Vw = self._at_points("f_w", at), self._at_points("V_w", at)
-            fss = fw + (fss - fw) / (1.0 + (V / Vw) ** 8) ** 0.125
-        y = np.maximum(fss / a, 1e-300)
-        lnsinh = np.where(y > 20.0, y - LN2, np.log(np.sinh(np.minimum(y, 20.0))))
-        return a * (LN2 - lnv + lnsinh)
-
-    def state_rate(self, V, psi, at=None):
-        """dpsi/dt at slip rate V and state psi: the ageing law (b V0 / L)[exp((f0 - psi) / b)
-        - V / V0], or the slip law -(V / L)(psi - psi_ss(V)) (module docstring); ``at`` as
-        for :meth:`slip_rate`."""
-        V, psi = np.asarray(V, dtype=float), np.asarray(psi, dtype=float)
-        b, V0, L, f0 = (self._at_points(n, at) for n in ("b", "V0", "L", "f0"))
-        if self.evolution == "ageing":
-            with np.errstate(over="ignore"):     # a trial stage far off: inf, which the step rejects
-                return (b * V0 / L) * (np.exp((f0 - psi) / b) - V / V0)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            return np.where(V > 0, -(V / L) * (psi - self.steady_state(np.maximum(V, 1e-300), at)), 0.0)
 
     def _constants(self, shape, dt):
         """The parameters as (flat array, stride) for the pass, with 1 / a, dt / L, V0 dt / L and ln(2 V0)."""

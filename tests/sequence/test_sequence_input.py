@@ -90,25 +90,29 @@ def test_a_step_that_cannot_meet_its_tolerance_stops_with_time_place_and_values(
 
 
 def test_the_law_protocol_solves_and_evolves():
-    """slip_rate solves T - eta V = sigma f(V, psi); the ageing law's state rate is b / theta
-    d theta / dt with d theta / dt = 1 - V theta / L; the slip law's vanishes at steady state."""
+    """slide_rates solves T - eta V = sigma f(V, psi); the ageing law's state rate is b / theta
+    d theta / dt with d theta / dt = 1 - V theta / L; the slip law's vanishes at steady state,
+    psi_ss = a ln[(2 V0 / V) sinh(f_ss / a)]."""
     from cracklab import RateState
     from cracklab.laws.rate_state import friction_coefficient
 
     law = RateState(a=0.01, b=0.015, L=0.008, V0=1e-6, f0=0.6, sigma_n=50e6, V_ini=1e-9)
     T = np.array([30e6, 31e6, 35e6, 0.0])
     psi = np.array([0.7, 0.68, 0.6, 0.7])
-    V, lnV = law.slip_rate(T, psi, 50e6, 5e6)
+    V, lnV, dpsi = law.slide_rates(T, psi, 50e6, 5e6)
     np.testing.assert_allclose(T - 5e6 * V, 50e6 * friction_coefficient(V, psi, 0.01, 1e-6), rtol=1e-9, atol=1e-3)
     assert V[-1] == 0.0
     theta = 0.008 / 1e-6 * np.exp((psi - 0.6) / 0.015)
-    np.testing.assert_allclose(law.state_rate(V, psi), 0.015 / theta * (1 - V * theta / 0.008), rtol=1e-12)
+    np.testing.assert_allclose(dpsi, 0.015 / theta * (1 - V * theta / 0.008), rtol=1e-12)
     slip = dataclasses.replace(law, evolution="slip")
     Vs = np.array([1e-9, 1e-3, 1.0])
-    pss = slip.steady_state(Vs)
-    np.testing.assert_allclose(friction_coefficient(Vs, pss, 0.01, 1e-6), 0.6 - 0.005 * np.log(Vs / 1e-6),
-                               rtol=1e-12)
-    np.testing.assert_allclose(slip.state_rate(Vs, pss), 0.0, atol=1e-18)
+    fss = 0.6 - 0.005 * np.log(Vs / 1e-6)
+    pss = 0.01 * np.log(2e-6 / Vs * np.sinh(fss / 0.01))
+    np.testing.assert_allclose(friction_coefficient(Vs, pss, 0.01, 1e-6), fss, rtol=1e-12)
+    V, _, dpsi = slip.slide_rates(5e6 * Vs + 50e6 * fss, pss, 50e6, 5e6)     # sliding at Vs in steady state
+    np.testing.assert_allclose(V, Vs, rtol=1e-9)
+    # zero, but for the Newton solve's last 1e-10 of V: below 1e-9 of the rate scale V / L
+    assert np.all(np.abs(dpsi) < 1e-9 * Vs / 0.008), dpsi
 
 
 def test_cracklab_run_of_a_sequence_scene_reports_its_steps_and_events(tmp_path):
