@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..version import __version__
+from .simulate import scene_of, stations
 
 FIELDS = "t slip slip_rate shear_stress state"
 COLUMNS = ("Time (s)", "Slip (m)", "Slip rate (log10 m/s)", "Shear stress (MPa)", "State (log10 s)")
@@ -29,20 +30,17 @@ def _theta(law, psi, node):
     return at("L") / at("V0") * np.exp((psi - at("f0")) / at("b"))
 
 
-def _header(problem, author, code, ds, extra):
+def _header(problem, author, code, ds, dx):
     return [f"# problem={problem}", f"# author={author}", f"# date={datetime.date.today():%Y/%m/%d}",
-            f"# code={code}", f"# code version={__version__}",
-            f"# element size={float(np.diff(ds.x1.values[:2])[0]):g} m",
+            f"# code={code}", f"# code version={__version__}", f"# element size={dx:g} m",
             f"# minimum time step={ds.attrs.get('smallest_step', float('nan')):.6g}",
-            f"# maximum time step={ds.attrs.get('largest_step', float('nan')):.6g}", *extra]
+            f"# maximum time step={ds.attrs.get('largest_step', float('nan')):.6g}"]
 
 
 def export_seas(ds, directory, *, author="", code="cracklab", problem="SEAS Benchmark No.1", depth_step=500.0,
                 depth_max=40e3) -> list[Path]:
     """Write the SEAS files of the sequence run ``ds`` (its stations and its ``delta_3``
     snapshots) into ``directory``; returns the paths written."""
-    from .simulate import scene_of, stations
-
     scene = scene_of(ds)
     if scene.sequence is None or not scene.grid.plane or 3 not in scene.sequence.plate:
         raise InputError("ds", "the SEAS files are those of an antiplane sequence (a plane scene with sequence set "
@@ -53,6 +51,7 @@ def export_seas(ds, directory, *, author="", code="cracklab", problem="SEAS Benc
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
     written = []
+    head = _header(problem, author, code, ds, scene.grid.dx1)
     st = stations(ds)
     t = st.t.values
     for name in st.station.values:
@@ -62,8 +61,7 @@ def export_seas(ds, directory, *, author="", code="cracklab", problem="SEAS Benc
             rate = np.log10(np.abs(s.v_3.values))
         data = np.column_stack([t, s.delta_3.values, rate, s.tau_3.values / 1e6,
                                 np.log10(_theta(scene.law, s.psi.values, node))])
-        lines = _header(problem, author, code, ds, [f"# num time steps={len(t)}",
-                                                     f"# location=on fault, {float(s.x1) / 1e3:g} km depth"])
+        lines = head + [f"# num time steps={len(t)}", f"# location=on fault, {float(s.x1) / 1e3:g} km depth"]
         lines += [f"# Column #{i + 1} = {c}" for i, c in enumerate(COLUMNS)]
         lines += ["#", FIELDS]
         lines += [f"{row[0]:21.13E} " + " ".join(f"{v:14.6E}" for v in row[1:]) for row in data]
@@ -77,8 +75,8 @@ def export_seas(ds, directory, *, author="", code="cracklab", problem="SEAS Benc
     slip = ds.delta_3.isel(x3=0).values[:, idx]
     ts = ds.t.values
     vmax = np.interp(ts, ds.t_station.values, ds.max_slip_rate.values)
-    lines = _header(problem, author, code, ds, [f"# computational domain: the periodic line of {scene.grid.L1:g} m "
-                                                f"(the fault and its mirror image), creeping below {depth_max:g} m"])
+    lines = head + [f"# computational domain: the periodic line of {scene.grid.L1:g} m (the fault and its mirror "
+                    f"image), creeping below {depth_max:g} m"]
     lines += ["# Column #1 = Time (s)", "# Column #2 = Max slip rate (log10 m/s)", "# Column #3 = Slip (m)",
               "z", "t max_slip_rate slip"]
     lines.append(" ".join(f"{v:14.6E}" for v in np.concatenate([[0.0, 0.0], x1[idx]])))

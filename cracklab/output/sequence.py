@@ -11,12 +11,13 @@ import warnings
 import numpy as np
 import xarray as xr
 
-from ..errors import InputError, StoreWarning
+from ..errors import InputError
+from ..laws.base import cell_area_and_width
 from ..model.scene_io import scene_to_json
 from ..model.units import unit
 from ..solver.sequence.run import SequenceRun
 from ..version import __version__
-from . import checkpoint
+from . import checkpoint, verify
 from .attrs import field_attrs, input_attrs
 from .disk import FLUSH
 from .policy import checkpoint_policy
@@ -96,7 +97,7 @@ class _Events:
         grid = scene.grid
         slip = _slip(state) - ev["slip0"]
         area = ev["vmax"] >= self.threshold
-        cell = grid.dx1 * (1.0 if grid.plane else grid.dx3)
+        cell, _ = cell_area_and_width(grid)
         region = np.zeros(grid.shape, bool)
         region[self.s1, self.s3] = True
         ruptured = area & region
@@ -171,8 +172,7 @@ class SequenceRecorder:
         self.fields = [f for f in rec.fields if f == "psi" or f.split("_")[0] in ("delta", "v", "tau")
                        and int(f.split("_")[1]) in comps]
         self.station_fields = [f"{k}_{c}" for k in ("delta", "v", "tau") for c in comps] + ["psi"]
-        dx = grid.dx1 if grid.plane else min(grid.dx1, grid.dx3)
-        self.slow, self.fast = seq.intervals(dx, scene.material.cs, scene.t_end)
+        self.slow, self.fast = seq.intervals(grid.dx_min, scene.material.cs, scene.t_end)
         self.events = _Events(scene, self.s1, self.s3)
         self.snaps, self.snap_t, self.snap_kind = [], [], []
         self.rows = {name: [] for name in ("t_station", "max_slip_rate", "x1", "x3", "time_step")}
@@ -180,7 +180,9 @@ class SequenceRecorder:
         self.next_snapshot = 0.0
         self.smallest, self.largest = math.inf, 0.0
         self.written = {"t": 0, "t_station": 0}     # rows in the store
-        self._identity = None
+        # the scene as attrs and input arrays, and its digest, serialised once per run
+        self.scene_json, self.inputs = scene_to_json(scene)
+        self.digest = checkpoint.scene_digest(self.scene_json, self.inputs)
 
     def __call__(self, state) -> None:
         scene, grid, seq = self.scene, self.scene.grid, self.scene.sequence
@@ -265,11 +267,10 @@ class SequenceRecorder:
         """The catalogue, the scene's inputs and the attrs."""
         scene = self.scene
         ds = self.events.dataset(scene.units)
-        text, inputs = scene_to_json(scene)
-        for name, arr in inputs.items():
+        for name, arr in self.inputs.items():
             ds[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(scene, name))
         ds.attrs = {"Conventions": "CF-1.10", "title": f"cracklab sequence: {scene.name}",
-                    "source": f"cracklab {__version__}", "cracklab_version": __version__, "scene": text,
+                    "source": f"cracklab {__version__}", "cracklab_version": __version__, "scene": self.scene_json,
                     "event_threshold": scene.sequence.event_threshold, "accepted_steps": int(steps),
                     "smallest_step": self.smallest, "largest_step": self.largest}
         return ds
@@ -307,11 +308,8 @@ class SequenceRecorder:
     def identity(self, status) -> dict:
         """The store's group attrs while it runs: what identifies the run (its scene and
         digest, so that ``cracklab run`` knows the store as this scene's run) and its status."""
-        if self._identity is None:
-            text, inputs = scene_to_json(self.scene)
-            self._identity = {"scene": text, "cracklab_run_format": checkpoint.RUN_FORMAT,
-                              "cracklab_scene_digest": checkpoint.scene_digest(text, inputs)}
-        return {**self._identity, "cracklab_status": status}
+        return {"scene": self.scene_json, "cracklab_run_format": checkpoint.RUN_FORMAT,
+                "cracklab_scene_digest": self.digest, "cracklab_status": status}
 
     def _mark(self, status, extra=None) -> None:
         import zarr
@@ -395,13 +393,11 @@ def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_
         raise InputError("store", "a sequence streams to a local Zarr path for now, got " + repr(store))
     rec = SequenceRecorder(scene, path)
     start = None
-    if resume and path is not None and _complete(path, scene):
+    if resume and path is not None and _complete(path, rec.digest):
         return xr.open_zarr(str(path))
     if resume and path is not None and path.exists():
         ck = checkpoint.read(path)
-        text, inputs = scene_to_json(scene)
-        digest = checkpoint.scene_digest(text, inputs)
-        if ck is not None and ck.get("digest") == digest:
+        if ck is not None and ck.get("digest") == rec.digest:
             start = ck
             _cut(path, ck["recorder"]["written"])
             rec.set_state(ck["recorder"])
@@ -414,7 +410,6 @@ def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_
     every_n, every_s = checkpoint_policy(checkpoint_every)
     last_ck = time.monotonic()
     bar = _progress(progress, scene)
-    digest = None
     for state in run:
         rec(state)
         if bar is not None:
@@ -425,36 +420,28 @@ def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_
             rec.flush()             # memory bounded: a resume cuts what came after its checkpoint
         if path is not None and due:
             rec.flush()
-            if digest is None:
-                text, inputs = scene_to_json(scene)
-                digest = checkpoint.scene_digest(text, inputs)
-            checkpoint.write(path, {"digest": digest, "run": run.get_state(), "recorder": rec.get_state()})
+            checkpoint.write(path, {"digest": rec.digest, "run": run.get_state(), "recorder": rec.get_state()})
             last_ck = time.monotonic()
     if bar is not None:
         bar.close()
     return rec.finish(run.n, None if start is None else int(start["run"]["n"]))
 
 
-def _complete(path, scene) -> bool:
-    """The store at ``path`` holds this scene's sequence, complete, every chunk read back
-    against its checksum."""
+def _complete(path, digest) -> bool:
+    """The store at ``path`` holds the sequence of the scene of ``digest``, complete and
+    sound (``cracklab.output.verify``: every array and chunk there, read against its checksum)."""
     import zarr
 
     try:
         attrs = dict(zarr.open_group(str(path), mode="r").attrs)
     except Exception:  # noqa: BLE001 - absent or not a Zarr group
         return False
-    text, inputs = scene_to_json(scene)
-    if attrs.get("cracklab_status") != "complete" or \
-            attrs.get("cracklab_scene_digest") != checkpoint.scene_digest(text, inputs):
+    if attrs.get("cracklab_status") != "complete" or attrs.get("cracklab_scene_digest") != digest:
         return False
-    try:
-        xr.open_zarr(str(path)).load()
-    except Exception:  # noqa: BLE001 - a damaged chunk: the run is done again
-        warnings.warn(StoreWarning(f"store {path} is damaged (a chunk fails to read or its checksum); the sequence "
-                                   f"is run again from the start"), stacklevel=3)
-        return False
-    return True
+    report = verify.check_run(path)
+    if not report.ok:
+        verify.warn_damaged(path, report, "the sequence is run again from the start")
+    return report.ok
 
 
 def _cut(path, written) -> None:

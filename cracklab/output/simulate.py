@@ -10,7 +10,7 @@ import xarray as xr
 from ..version import __version__
 from . import checkpoint
 from .disk import FLUSH, check_disk as holds, output_size, snapshots_per_chunk
-from ..errors import InputError, Interrupted, SimulationError, StoreError, StoreWarning
+from ..errors import InputError, Interrupted, SimulationError, StoreError
 from ..model.record import face_field
 from ..model.scene_io import scene_from_data, scene_to_json
 from .policy import CHECKPOINT_SECONDS, checkpoint_policy  # noqa: F401
@@ -280,10 +280,6 @@ def _consolidate(store):
         zarr.consolidate_metadata(store)
 
 
-def _damaged(path, report, doing):
-    warnings.warn(StoreWarning(f"store {path} is damaged: {report.first()}; {doing}"), stacklevel=3)
-
-
 @contextlib.contextmanager
 def _deferred_interrupt(enabled):
     """While a run into a store steps in the main thread, Ctrl-C (SIGINT) only sets a flag
@@ -375,13 +371,13 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
                     if ck is not None:          # killed after the status, before the clean-up
                         checkpoint.remove(path)
                     return xr.open_zarr(store, consolidated=False)
-                _damaged(path, report, "the run is done again from the start")
+                verify.warn_damaged(path, report, "the run is done again from the start")
                 ck = None
             elif ck is not None:
                 report = verify.check_run(path, snapshots=int(ck["nsnap"]), final=False)
                 if not report.ok:
-                    _damaged(path, report, f"its checkpoint after step {int(ck['n'])} cannot be resumed from: "
-                                           f"the run is done again from the start")
+                    verify.warn_damaged(path, report, f"its checkpoint after step {int(ck['n'])} cannot be resumed "
+                                                      f"from: the run is done again from the start")
                     ck = None
             if ck is not None:
                 rec.restore(ck)

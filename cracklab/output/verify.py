@@ -23,10 +23,12 @@ from __future__ import annotations
 import json
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 from itertools import product
 from pathlib import Path
 
+from ..errors import StoreWarning
 from .checkpoint import is_final_array
 
 CHECKSUM_CODEC = "crc32c"
@@ -352,3 +354,9 @@ def verify(store, *, read: bool = True) -> Report:
     if "scene" in attrs or "cracklab_run_format" in attrs:
         return check_run(p, read=read)
     raise StoreError(p, "is not a cracklab run or ensemble store (no 'scene' or 'cracklab_ensemble' attribute)")
+
+
+def warn_damaged(path, report, doing) -> None:
+    """A StoreWarning that the store at ``path`` is damaged (``report``: its check), and
+    what the run does about it (``doing``), attributed to the caller of the run."""
+    warnings.warn(StoreWarning(f"store {path} is damaged: {report.first()}; {doing}"), stacklevel=3)
