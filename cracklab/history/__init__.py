@@ -16,8 +16,9 @@ from .base import REGISTRY, register  # noqa: F401
 
 
 #: the modules of the package that hold no engine (the protocol, the exponential engine's
-#: compiled loops, which load on first use, its fits and the weight tables)
-_HELPERS = ("base", "blocked", "fit", "tables")
+#: compiled loops, which load on first use, its fits and the weight tables; the history at a
+#: variable step of the sequences, which is not a fixed-step engine)
+_HELPERS = ("base", "blocked", "fit", "tables", "variable")
 
 
 def _discover() -> dict:

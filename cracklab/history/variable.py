@@ -1,0 +1,296 @@
+"""The exact history at a variable time step (docs/reference/equations.md, "Sequences: the
+dynamic response at a variable step").
+
+For each mode of rate r = q c_s (> 0) the engine gives the convolution of Eq. (33),
+
+    I(t) = int_0^t Z(r (t - s)) V(s) ds,
+
+for a slip-rate history V that is linear between the ends of the steps taken (continuous,
+V = 0 before t = 0), whatever their lengths. In u = r (t - s):
+
+* near, u < T0: the exact kernel, through P0 = int_0^u Z and P00 = int_0^u P0, Chebyshev
+  series per panel of [0, T0] built from the closed form of Z (``elastic.kernels.Z``), so a
+  piece of V contributes (P0, P00 at its clipped ends, divided by its length);
+* tail, u >= T0: the exponential fit Z ~ 2 Re sum_p c_p exp(lambda_p u) (history/fit.py).
+  One complex state per term and per real input (Re V, Im V),
+  S_p(t) = int_{s < t - T0/r} exp(lambda_p r (t - s)) V(s) ds, advances over a step h of
+  any length exactly: S_p(t + h) = exp(lambda_p r h) S_p(t) + the integral over the slab
+  of V that crossed u = T0 during the step, in closed form per piece.
+
+Nothing is sampled or re-interpolated: the only approximation is the fit of the tail.
+A mode keeps the pieces of V still inside its near window, at most ceil(T0 / (r h_floor))
++ 3 of them for steps no shorter than ``h_floor``; step lengths (not times) are stored, so
+the ages of the pieces are sums of step lengths and keep their precision late in a long
+run.
+
+A step is taken in two calls: :meth:`VariableHistory.prepare` (h, with the step's start
+value already pushed) gives I(t + h) = A + B V(t + h) for every mode, linear in the
+unknown end value (the interface law then finds V(t + h)); :meth:`commit` (V(t + h)) pushes
+it and advances the states.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import SimulationError
+from ..jit import njit
+from .fit import get_fit
+
+__all__ = ["NearTable", "VariableHistory", "T0_VARIABLE"]
+
+#: the start of the fitted tail in u = q c_s (t - s)
+T0_VARIABLE = 4.0
+#: panels of [0, T0] and the degree of their Chebyshev series of Z
+_PANELS = 16
+_DEGREE = 24
+
+
+class NearTable:
+    """P0(u) = int_0^u Z and P00(u) = int_0^u P0 on [0, T0]: Chebyshev coefficients per panel
+    (``p0``, ``p00``: (panels, degree + 2)), in the panel's variable x = (u - centre) / half."""
+
+    def __init__(self, kernel, nu, T0=T0_VARIABLE, panels=_PANELS, degree=_DEGREE):
+        from numpy.polynomial import chebyshev as C
+
+        from ..elastic.kernels import Z
+
+        self.T0, self.panels = float(T0), int(panels)
+        width = self.T0 / self.panels
+        self.half = 0.5 * width
+        nodes = np.cos(np.pi * (np.arange(degree + 1) + 0.5) / (degree + 1))
+        p0 = np.zeros((self.panels, degree + 3))
+        p00 = np.zeros((self.panels, degree + 3))
+        v0 = v00 = 0.0
+        for i in range(self.panels):
+            centre = (i + 0.5) * width
+            z = C.chebfit(nodes, np.asarray(Z(kernel, centre + self.half * nodes, nu), dtype=float), degree)
+            c0 = C.chebint(z, lbnd=-1.0, k=0.0, scl=self.half)     # int from the panel's left end
+            c0[0] += v0
+            c00 = C.chebint(c0, lbnd=-1.0, k=0.0, scl=self.half)
+            c00[0] += v00
+            p0[i, :c0.size], p00[i, :c00.size] = c0, c00
+            v0, v00 = float(C.chebval(1.0, c0)), float(C.chebval(1.0, c00))
+        self.p0, self.p00 = p0, p00
+
+    def __call__(self, u):
+        """(P0(u), P00(u)) for u in [0, T0] (numpy; the engine's loop evaluates them compiled)."""
+        u = np.atleast_1d(np.asarray(u, dtype=float))
+        out = np.array([_p(self.p0, self.p00, self.half, x) for x in u])
+        return out[:, 0], out[:, 1]
+
+
+class VariableHistory:
+    """The convolutions I(t) of one kernel (``kernel`` "I", "II" or "III" at Poisson's ratio
+    ``nu``) for modes of rates ``r`` (q c_s, > 0), at steps no shorter than ``h_floor``.
+    ``tol``: the fit's tolerance (history/fit.py's default when None)."""
+
+    def __init__(self, kernel, nu, r, h_floor, *, T0=T0_VARIABLE, tol=None):
+        r = np.ascontiguousarray(r, dtype=float)
+        if r.ndim != 1 or np.any(~(r > 0)) or not np.all(np.isfinite(r)):
+            raise ValueError("r must be a 1D array of finite rates > 0")
+        if not h_floor > 0:
+            raise ValueError("h_floor must be > 0")
+        self.kernel, self.nu, self.T0, self.h_floor = kernel, float(nu), float(T0), float(h_floor)
+        self.r = r
+        fit = get_fit(kernel, nu, "velocity", T0=self.T0, tol=tol)
+        self.lam = np.ascontiguousarray(fit.lam, dtype=complex)
+        self.coef = np.ascontiguousarray(fit.coef, dtype=complex)
+        self.near = NearTable(kernel, nu, self.T0)
+        cap = np.ceil(self.T0 / (r * self.h_floor)).astype(np.int64) + 3
+        self.cap = cap
+        self.off = np.concatenate([[0], np.cumsum(cap)]).astype(np.int64)
+        self.ring = np.zeros(int(self.off[-1]), dtype=complex)     # V at the ends of the pieces kept
+        self.hcap = int(cap.max()) + 1
+        self.hring = np.zeros(self.hcap)                              # the step lengths
+        M, P = r.size, self.lam.size
+        self.first = np.zeros(M, dtype=np.int64)   # per mode: the oldest step end it keeps
+        self.n = 0                                  # step ends pushed: 0 .. n
+        self.started = False
+        self.SR = np.zeros((M, P), dtype=complex)
+        self.SI = np.zeros((M, P), dtype=complex)
+        self._prep = None
+
+    @property
+    def modes(self) -> int:
+        return self.r.size
+
+    def start(self, V0):
+        """Push the value at t = 0 (before the first step)."""
+        if self.started:
+            raise RuntimeError("the history has started already")
+        _push(self.ring, self.off, self.cap, 0, np.ascontiguousarray(V0, dtype=complex))
+        self.started = True
+
+    def prepare(self, h):
+        """(A, B): I(t + h) = A + B V(t + h) for every mode (A complex, B real)."""
+        if not self.started:
+            raise RuntimeError("start(V0) first")
+        h = float(h)
+        if not h >= self.h_floor * (1 - 1e-12):
+            raise ValueError(f"a step of {h:g} is shorter than the history's floor {self.h_floor:g}")
+        M, P = self.SR.shape
+        A = np.zeros(M, dtype=complex)
+        B = np.zeros(M)
+        kR = np.empty((M, P), dtype=complex)
+        kI = np.empty((M, P), dtype=complex)
+        sB = np.empty((M, P), dtype=complex)
+        _prepare(self.r, self.lam, self.coef, self.near.p0, self.near.p00, self.near.half, self.T0,
+                 self.ring, self.off, self.cap, self.hring, self.hcap, self.first, self.n, h,
+                 self.SR, self.SI, A, B, kR, kI, sB)
+        self._prep = (h, kR, kI, sB)
+        return A, B
+
+    def commit(self, V):
+        """Push the end value V(t + h) of the step prepared last and advance the states."""
+        if self._prep is None:
+            raise RuntimeError("prepare(h) first")
+        h, kR, kI, sB = self._prep
+        V = np.ascontiguousarray(V, dtype=complex)
+        self.SR = kR + sB * V.real[:, None]
+        self.SI = kI + sB * V.imag[:, None]
+        self.hring[self.n % self.hcap] = h
+        self.n += 1
+        _push(self.ring, self.off, self.cap, self.n, V)
+        over = _drop(self.r, self.T0, self.hring, self.hcap, self.first, self.n, self.cap)
+        self._prep = None
+        if over >= 0:
+            raise SimulationError(f"the history of mode {over} holds more pieces than its ring: steps shorter "
+                                  f"than the floor {self.h_floor:g}")
+
+    def get_state(self) -> dict:
+        return {"ring": self.ring.copy(), "hring": self.hring.copy(), "first": self.first.copy(), "n": self.n,
+                "started": self.started, "SR": self.SR.copy(), "SI": self.SI.copy()}
+
+    def set_state(self, state: dict) -> None:
+        self.ring = np.array(state["ring"], dtype=complex)
+        self.hring = np.array(state["hring"], dtype=float)
+        self.first = np.array(state["first"], dtype=np.int64)
+        self.n, self.started = int(state["n"]), bool(state["started"])
+        self.SR = np.array(state["SR"], dtype=complex)
+        self.SI = np.array(state["SI"], dtype=complex)
+        self._prep = None
+
+
+# ------------------------------------------------------------------------ compiled loops
+@njit()
+def _cheb(c, x):
+    """Clenshaw: sum_k c_k T_k(x)."""
+    b1 = 0.0
+    b2 = 0.0
+    for k in range(c.size - 1, 0, -1):
+        b1, b2 = 2.0 * x * b1 - b2 + c[k], b1
+    return x * b1 - b2 + c[0]
+
+
+@njit()
+def _p(p0, p00, half, u):
+    """(P0(u), P00(u)) from the panels' series."""
+    i = int(u / (2.0 * half))
+    if i >= p0.shape[0]:
+        i = p0.shape[0] - 1
+    if i < 0:
+        i = 0
+    x = (u - (2 * i + 1) * half) / half
+    return _cheb(p0[i], x), _cheb(p00[i], x)
+
+
+@njit()
+def _phi(z):
+    """((e^z - 1)/z, (e^z (z - 1) + 1)/z^2): int_0^1 e^{z v} dv and int_0^1 v e^{z v} dv."""
+    if abs(z) < 1e-3:
+        z2 = z * z
+        return (1.0 + z / 2.0 + z2 / 6.0 + z2 * z / 24.0 + z2 * z2 / 120.0,
+                0.5 + z / 3.0 + z2 / 8.0 + z2 * z / 30.0 + z2 * z2 / 144.0)
+    e = np.exp(z)
+    return (e - 1.0) / z, (e * (z - 1.0) + 1.0) / (z * z)
+
+
+@njit()
+def _push(ring, off, cap, j, V):
+    for k in range(cap.size):
+        ring[off[k] + j % cap[k]] = V[k]
+
+
+@njit()
+def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first, n, h, SR, SI, A, B, kR, kI, sB):
+    M = r.size
+    P = lam.size
+    for k in range(M):
+        rk = r[k]
+        lo = T0
+        hi = T0 + rk * h
+        acc = 0.0 + 0.0j
+        bk = 0.0
+        for p in range(P):
+            g = np.exp(lam[p] * rk * h)
+            kR[k, p] = g * SR[k, p]
+            kI[k, p] = g * SI[k, p]
+            sB[k, p] = 0.0
+        # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step)
+        ub = 0.0
+        for j in range(n, first[k] - 1, -1):
+            hj = h if j == n else hring[j % hcap]
+            ua = ub + rk * hj
+            d = ua - ub
+            Va = ring[off[k] + j % cap[k]]
+            Vb = 0.0 + 0.0j if j == n else ring[off[k] + (j + 1) % cap[k]]
+            if ub < T0:                                   # near: the exact kernel
+                x = ub
+                y = ua if ua < T0 else T0
+                P0x, P00x = _p(p0, p00, half, x)
+                P0y, P00y = _p(p0, p00, half, y)
+                d00 = P00y - P00x
+                wa = ((y - ub) * P0y - (x - ub) * P0x - d00) / d
+                wb = ((ua - y) * P0y - (ua - x) * P0x + d00) / d
+                acc += (wa * Va + wb * Vb) / rk
+                if j == n:
+                    bk += wb / rk
+            if ua > lo and ub < hi:                        # the slab that crossed u = T0
+                x = ub if ub > lo else lo
+                y = ua if ua < hi else hi
+                L = y - x
+                ca = (x - ub) / d                        # the weight of Va at x, and its growth
+                cb = (ua - x) / d
+                for p in range(P):
+                    z = lam[p] * L
+                    f1, f2 = _phi(z)
+                    ex = np.exp(lam[p] * x) * L / rk
+                    ea = ex * (ca * f1 + (L / d) * f2)   # int e^{lam u} (u - ub)/d du / r
+                    eb = ex * (cb * f1 - (L / d) * f2)   # int e^{lam u} (ua - u)/d du / r
+                    kR[k, p] += ea * Va.real + eb * Vb.real
+                    kI[k, p] += ea * Va.imag + eb * Vb.imag
+                    if j == n:
+                        sB[k, p] += eb
+            if ua >= hi:
+                break
+            ub = ua
+        tail = 0.0 + 0.0j
+        tb = 0.0
+        for p in range(P):
+            c = coef[p]
+            tail += 2.0 * (c * kR[k, p]).real + 2.0j * (c * kI[k, p]).real
+            tb += 2.0 * (c * sB[k, p]).real
+        A[k] = acc + tail
+        B[k] = bk + tb
+
+
+@njit()
+def _drop(r, T0, hring, hcap, first, n, cap):
+    """Forget the pieces wholly past u = T0; the first mode whose ring would overflow, or -1."""
+    over = -1
+    for k in range(r.size):
+        u = 0.0
+        j = n - 1
+        lim = T0 / r[k]
+        while j >= first[k]:
+            u += hring[j % hcap]
+            if u >= lim:
+                break
+            j -= 1
+        if j > first[k]:
+            first[k] = j
+        if n - first[k] + 1 > cap[k] and over < 0:
+            over = k
+    return over
