@@ -19,7 +19,8 @@ V = 0 before t = 0), whatever their lengths. In u = r (t - s):
 
 Nothing is sampled or re-interpolated: the only approximation is the fit of the tail.
 A mode keeps the pieces of V still inside its near window, at most ceil(T0 / (r h_floor))
-+ 3 of them for steps no shorter than ``h_floor``; step lengths (not times) are stored, so
++ 3 of them for steps no shorter than ``h_floor`` (a step or two shorter fit in; more stop
+the run); step lengths (not times) are stored, so
 the ages of the pieces are sums of step lengths and keep their precision late in a long
 run.
 
@@ -38,13 +39,26 @@ from ..errors import SimulationError
 from ..jit import njit
 from .fit import get_fit
 
-__all__ = ["NearTable", "VariableHistory", "T0_VARIABLE"]
+__all__ = ["NearTable", "VariableHistory", "T0_VARIABLE", "memory"]
 
 #: the start of the fitted tail in u = q c_s (t - s)
 T0_VARIABLE = 4.0
 #: panels of [0, T0] and the degree of their Chebyshev series of Z
 _PANELS = 16
 _DEGREE = 24
+
+
+def _capacity(r, T0, h_floor):
+    """The pieces a mode of rate r keeps at most, for steps no shorter than ``h_floor``."""
+    return np.ceil(T0 / (np.asarray(r, dtype=float) * h_floor)).astype(np.int64) + 3
+
+
+def memory(kernel, nu, r, h_floor, *, T0=T0_VARIABLE, tol=None) -> int:
+    """Bytes a :class:`VariableHistory` of these arguments holds: its rings, step lengths,
+    states, the step's prepared states and the weights of a run of steps of ``h_floor``."""
+    cap = _capacity(r, T0, h_floor)
+    P = get_fit(kernel, nu, "velocity", T0=T0, tol=tol).lam.size
+    return int(cap.sum() * 24 + (cap.max() + 1) * 8 + np.size(r) * (10 * P * 16 + 8 + 24 + 32))
 
 
 class NearTable:
@@ -98,7 +112,7 @@ class VariableHistory:
         self.lam = np.ascontiguousarray(fit.lam, dtype=complex)
         self.coef = np.ascontiguousarray(fit.coef, dtype=complex)
         self.near = NearTable(kernel, nu, self.T0)
-        cap = np.ceil(self.T0 / (r * self.h_floor)).astype(np.int64) + 3
+        cap = _capacity(r, self.T0, self.h_floor)
         self.cap = cap
         self.off = np.concatenate([[0], np.cumsum(cap)]).astype(np.int64)
         self.ring = np.zeros(int(self.off[-1]), dtype=complex)     # V at the ends of the pieces kept
@@ -111,6 +125,8 @@ class VariableHistory:
         self.SR = np.zeros((M, P), dtype=complex)
         self.SI = np.zeros((M, P), dtype=complex)
         self._prep = None
+        self.last_h, self.run = None, 0     # the last step committed, and how many in a row were it
+        self._cache = None                  # the weights of a run of equal steps (h, arrays)
 
     @property
     def modes(self) -> int:
@@ -128,9 +144,10 @@ class VariableHistory:
         if not self.started:
             raise RuntimeError("start(V0) first")
         h = float(h)
-        if not h >= self.h_floor * (1 - 1e-12):
-            raise ValueError(f"a step of {h:g} is shorter than the history's floor {self.h_floor:g}")
+        if not h > 0:
+            raise ValueError(f"a step must be > 0, got {h!r}")
         M, P = self.SR.shape
+        cache = self._uniform(h)
         A = np.zeros(M, dtype=complex)
         B = np.zeros(M)
         kR = np.empty((M, P), dtype=complex)
@@ -138,9 +155,30 @@ class VariableHistory:
         sB = np.empty((M, P), dtype=complex)
         _prepare(self.r, self.lam, self.coef, self.near.p0, self.near.p00, self.near.half, self.T0,
                  self.ring, self.off, self.cap, self.hring, self.hcap, self.first, self.n, h,
-                 self.SR, self.SI, A, B, kR, kI, sB)
+                 self.SR, self.SI, A, B, kR, kI, sB, cache is not None, self.run, *(cache or self._NONE))
         self._prep = (h, kR, kI, sB)
         return A, B
+
+    _NONE = (np.zeros(1, np.int64), np.zeros(1), np.zeros(1, np.int64), np.zeros(1, np.int64),
+             np.zeros((1, 4, 1), complex), np.zeros((1, 1), complex))
+    #: equal steps in a row before their weights are computed once and reused
+    UNIFORM_AFTER = 8
+
+    def _uniform(self, h):
+        """The weights of a window of steps all ``h`` long (cL, cw, cwo, ce0, cs, cg), when the
+        last UNIFORM_AFTER steps were h long (a rupture at the dynamic step); else None."""
+        if h != self.last_h or self.run < self.UNIFORM_AFTER:
+            return None
+        if self._cache is None or self._cache[0] != h:
+            M, P = self.SR.shape
+            cL = np.zeros(M, dtype=np.int64)
+            _uniform_pieces(self.r, self.T0, h, cL)
+            cwo = np.concatenate([[0], np.cumsum(cL + 1)]).astype(np.int64)
+            arrays = (cL, np.zeros(int(cwo[-1])), cwo, np.zeros(M, dtype=np.int64),
+                      np.zeros((M, 4, P), dtype=complex), np.zeros((M, P), dtype=complex))
+            _uniform_weights(self.r, self.lam, self.near.p0, self.near.p00, self.near.half, self.T0, h, *arrays)
+            self._cache = (h, arrays)
+        return self._cache[1]
 
     def commit(self, V):
         """Push the end value V(t + h) of the step prepared last and advance the states."""
@@ -151,17 +189,20 @@ class VariableHistory:
         self.SR = kR + sB * V.real[:, None]
         self.SI = kI + sB * V.imag[:, None]
         self.hring[self.n % self.hcap] = h
+        self.run = self.run + 1 if h == self.last_h else 1
+        self.last_h = h
         self.n += 1
         _push(self.ring, self.off, self.cap, self.n, V)
         over = _drop(self.r, self.T0, self.hring, self.hcap, self.first, self.n, self.cap)
         self._prep = None
         if over >= 0:
-            raise SimulationError(f"the history of mode {over} holds more pieces than its ring: steps shorter "
-                                  f"than the floor {self.h_floor:g}")
+            raise SimulationError(f"the history of mode {over} (q c_s = {self.r[over]:.6g}) holds more pieces than "
+                                  f"its ring: too many steps shorter than the floor {self.h_floor:g}")
 
     def get_state(self) -> dict:
         return {"ring": self.ring.copy(), "hring": self.hring.copy(), "first": self.first.copy(), "n": self.n,
-                "started": self.started, "SR": self.SR.copy(), "SI": self.SI.copy()}
+                "started": self.started, "SR": self.SR.copy(), "SI": self.SI.copy(),
+                "last_h": self.last_h, "run": self.run}
 
     def set_state(self, state: dict) -> None:
         self.ring = np.array(state["ring"], dtype=complex)
@@ -170,6 +211,8 @@ class VariableHistory:
         self.n, self.started = int(state["n"]), bool(state["started"])
         self.SR = np.array(state["SR"], dtype=complex)
         self.SI = np.array(state["SI"], dtype=complex)
+        self.last_h = None if state["last_h"] is None else float(state["last_h"])
+        self.run = int(state["run"])
         self._prep = None
 
 
@@ -214,58 +257,97 @@ def _push(ring, off, cap, j, V):
 
 
 @njit()
-def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first, n, h, SR, SI, A, B, kR, kI, sB):
+def _near(p0, p00, half, T0, ua, ub):
+    """(w_a, w_b) of a piece from u_b to u_a on the exact kernel over u < T0 (times r)."""
+    d = ua - ub
+    x = ub
+    y = ua if ua < T0 else T0
+    P0x, P00x = _p(p0, p00, half, x)
+    P0y, P00y = _p(p0, p00, half, y)
+    d00 = P00y - P00x
+    return (((y - ub) * P0y - (x - ub) * P0x - d00) / d, ((ua - y) * P0y - (ua - x) * P0x + d00) / d)
+
+
+@njit()
+def _slab(lam, ua, ub, lo, hi, rk, ea, eb):
+    """ea_p, eb_p: int e^{lam_p u} (u - u_b)/d du / r and int e^{lam_p u} (u_a - u)/d du / r
+    over the part of the piece in [lo, hi]."""
+    d = ua - ub
+    x = ub if ub > lo else lo
+    y = ua if ua < hi else hi
+    L = y - x
+    ca = (x - ub) / d                        # the weight of Va at x
+    cb = (ua - x) / d
+    for p in range(lam.size):
+        f1, f2 = _phi(lam[p] * L)
+        ex = np.exp(lam[p] * x) * L / rk
+        ea[p] = ex * (ca * f1 + (L / d) * f2)
+        eb[p] = ex * (cb * f1 - (L / d) * f2)
+
+
+@njit()
+def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first, n, h, SR, SI, A, B, kR, kI, sB,
+             cached, run, cL, cw, cwo, ce0, cs, cg):
     M = r.size
     P = lam.size
+    ea = np.empty(P, dtype=np.complex128)
+    eb = np.empty(P, dtype=np.complex128)
     for k in range(M):
         rk = r[k]
-        lo = T0
-        hi = T0 + rk * h
         acc = 0.0 + 0.0j
         bk = 0.0
-        for p in range(P):
-            g = np.exp(lam[p] * rk * h)
-            kR[k, p] = g * SR[k, p]
-            kI[k, p] = g * SI[k, p]
-            sB[k, p] = 0.0
-        # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step)
-        ub = 0.0
-        for j in range(n, first[k] - 1, -1):
-            hj = h if j == n else hring[j % hcap]
-            ua = ub + rk * hj
-            d = ua - ub
-            Va = ring[off[k] + j % cap[k]]
-            Vb = 0.0 + 0.0j if j == n else ring[off[k] + (j + 1) % cap[k]]
-            if ub < T0:                                   # near: the exact kernel
-                x = ub
-                y = ua if ua < T0 else T0
-                P0x, P00x = _p(p0, p00, half, x)
-                P0y, P00y = _p(p0, p00, half, y)
-                d00 = P00y - P00x
-                wa = ((y - ub) * P0y - (x - ub) * P0x - d00) / d
-                wb = ((ua - y) * P0y - (ua - x) * P0x + d00) / d
-                acc += (wa * Va + wb * Vb) / rk
-                if j == n:
-                    bk += wb / rk
-            if ua > lo and ub < hi:                        # the slab that crossed u = T0
-                x = ub if ub > lo else lo
-                y = ua if ua < hi else hi
-                L = y - x
-                ca = (x - ub) / d                        # the weight of Va at x, and its growth
-                cb = (ua - x) / d
-                for p in range(P):
-                    z = lam[p] * L
-                    f1, f2 = _phi(z)
-                    ex = np.exp(lam[p] * x) * L / rk
-                    ea = ex * (ca * f1 + (L / d) * f2)   # int e^{lam u} (u - ub)/d du / r
-                    eb = ex * (cb * f1 - (L / d) * f2)   # int e^{lam u} (ua - u)/d du / r
-                    kR[k, p] += ea * Va.real + eb * Vb.real
-                    kI[k, p] += ea * Va.imag + eb * Vb.imag
+        if cached and run >= cL[k] - 1 and n - first[k] >= cL[k] - 1:
+            # every piece of the window is a step of h: the weights of the last uniform run
+            o = cwo[k]
+            for e in range(1, cL[k] + 1):
+                acc += cw[o + e] * ring[off[k] + (n + 1 - e) % cap[k]]
+            bk = cw[o]
+            for p in range(P):
+                kR[k, p] = cg[k, p] * SR[k, p]
+                kI[k, p] = cg[k, p] * SI[k, p]
+                sB[k, p] = 0.0
+            for i in range(4):
+                e = ce0[k] + i
+                if e > cL[k]:
+                    break
+                if e == 0:
+                    for p in range(P):
+                        sB[k, p] += cs[k, i, p]
+                else:
+                    V = ring[off[k] + (n + 1 - e) % cap[k]]
+                    for p in range(P):
+                        kR[k, p] += cs[k, i, p] * V.real
+                        kI[k, p] += cs[k, i, p] * V.imag
+        else:
+            lo = T0
+            hi = T0 + rk * h
+            for p in range(P):
+                g = np.exp(lam[p] * rk * h)
+                kR[k, p] = g * SR[k, p]
+                kI[k, p] = g * SI[k, p]
+                sB[k, p] = 0.0
+            # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step)
+            ub = 0.0
+            for j in range(n, first[k] - 1, -1):
+                hj = h if j == n else hring[j % hcap]
+                ua = ub + rk * hj
+                Va = ring[off[k] + j % cap[k]]
+                Vb = 0.0 + 0.0j if j == n else ring[off[k] + (j + 1) % cap[k]]
+                if ub < T0:                                   # near: the exact kernel
+                    wa, wb = _near(p0, p00, half, T0, ua, ub)
+                    acc += (wa * Va + wb * Vb) / rk
                     if j == n:
-                        sB[k, p] += eb
-            if ua >= hi:
-                break
-            ub = ua
+                        bk += wb / rk
+                if ua > lo and ub < hi:                        # the slab that crossed u = T0
+                    _slab(lam, ua, ub, lo, hi, rk, ea, eb)
+                    for p in range(P):
+                        kR[k, p] += ea[p] * Va.real + eb[p] * Vb.real
+                        kI[k, p] += ea[p] * Va.imag + eb[p] * Vb.imag
+                        if j == n:
+                            sB[k, p] += eb[p]
+                if ua >= hi:
+                    break
+                ub = ua
         tail = 0.0 + 0.0j
         tb = 0.0
         for p in range(P):
@@ -274,6 +356,58 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
             tb += 2.0 * (c * sB[k, p]).real
         A[k] = acc + tail
         B[k] = bk + tb
+
+
+@njit()
+def _uniform_pieces(r, T0, h, cL):
+    """The pieces of steps all h long that a mode's window and slab reach (as _prepare walks them)."""
+    for k in range(r.size):
+        rk = r[k]
+        hi = T0 + rk * h
+        ub = 0.0
+        m = 0
+        while True:
+            ua = ub + rk * h
+            m += 1
+            if ua >= hi:
+                break
+            ub = ua
+        cL[k] = m
+
+
+@njit()
+def _uniform_weights(r, lam, p0, p00, half, T0, h, cL, cw, cwo, ce0, cs, cg):
+    """The weights of a window of steps all h long, per end (e = 0: the step's own end)."""
+    P = lam.size
+    ea = np.empty(P, dtype=np.complex128)
+    eb = np.empty(P, dtype=np.complex128)
+    for k in range(r.size):
+        rk = r[k]
+        lo = T0
+        hi = T0 + rk * h
+        o = cwo[k]
+        for e in range(cL[k] + 1):
+            cw[o + e] = 0.0
+        for p in range(P):
+            cg[k, p] = np.exp(lam[p] * rk * h)
+            for i in range(4):
+                cs[k, i, p] = 0.0
+        ce0[k] = -1
+        ub = 0.0
+        for lag in range(cL[k]):
+            ua = ub + rk * h
+            if ub < T0:
+                wa, wb = _near(p0, p00, half, T0, ua, ub)
+                cw[o + lag + 1] += wa / rk
+                cw[o + lag] += wb / rk
+            if ua > lo and ub < hi:
+                if ce0[k] < 0:
+                    ce0[k] = lag
+                _slab(lam, ua, ub, lo, hi, rk, ea, eb)
+                for p in range(P):
+                    cs[k, lag + 1 - ce0[k], p] += ea[p]
+                    cs[k, lag - ce0[k], p] += eb[p]
+            ub = ua
 
 
 @njit()

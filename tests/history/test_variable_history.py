@@ -43,8 +43,8 @@ def exact(kernel, t, V, m):
     return total
 
 
-def run(kernel, tol=None):
-    h = steps()
+def run(kernel, tol=None, h=None):
+    h = steps() if h is None else h
     t = np.concatenate([[0.0], np.cumsum(h)])
     V = rate(t)
     eng = VariableHistory(kernel, NU, np.array([R]), h.min(), tol=tol)
@@ -89,8 +89,41 @@ def test_the_near_table_is_the_closed_form(kernel):
     assert np.max(np.abs(P00 - ref)) < 1e-13
 
 
-def test_steps_below_the_floor_are_refused():
-    eng = VariableHistory("III", NU, np.array([1.0]), 0.1)
+def test_many_steps_below_the_floor_stop_the_run():
+    from cracklab.errors import SimulationError
+
+    eng = VariableHistory("III", NU, np.array([1.0]), 0.1)      # 40 steps of 0.1 fill the window
     eng.start(np.zeros(1))
-    with pytest.raises(ValueError, match="floor"):
+    with pytest.raises(SimulationError, match="floor"):
+        for _ in range(100):
+            eng.prepare(0.01)
+            eng.commit(np.ones(1))
+
+
+def test_the_memory_estimate_is_what_the_history_holds():
+    from cracklab.history.variable import memory
+
+    r = 2 * np.pi * np.arange(1, 200) / 1e4 * 3000.0
+    eng = VariableHistory("II", NU, r, 0.01)
+    eng.start(np.zeros(r.size))
+    for _ in range(VariableHistory.UNIFORM_AFTER + 2):
         eng.prepare(0.01)
+        eng.commit(np.ones(r.size))
+    eng.prepare(0.01)
+    prep = sum(a.nbytes for a in eng._prep[1:]) + sum(a.nbytes for a in eng._cache[1])
+    held = eng.ring.nbytes + eng.hring.nbytes + eng.SR.nbytes + eng.SI.nbytes + prep + eng.first.nbytes + r.nbytes
+    assert abs(memory("II", NU, r, 0.01) - held) <= 0.05 * held, (memory("II", NU, r, 0.01), held)
+
+
+def test_a_run_of_equal_steps_reuses_its_weights(monkeypatch):
+    """Steps at a fixed length (a rupture at the dynamic step) take the weights computed once
+    for that length: the same convolution as the general pass to round-off, and the exact
+    one to the fit's accuracy."""
+    h = np.concatenate([10.0 ** np.linspace(1, -2, 20), np.full(600, 0.01), 10.0 ** np.linspace(-2, 1, 10),
+                        np.full(20, 10.0), [3.0]]) / R
+    t, V, fast = run("II", h=h)
+    monkeypatch.setattr(VariableHistory, "UNIFORM_AFTER", 10 ** 9)
+    _, _, general = run("II", h=h)
+    assert np.max(np.abs(fast - general)) <= 1e-12 * np.max(np.abs(general))
+    err = max(abs(fast[m - 1] - exact("II", t, V, m)) for m in (100, 620, 630, 651))
+    assert err <= 5 * DEFAULT_TOL["II"] * np.max(np.abs(V)), err
