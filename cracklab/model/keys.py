@@ -115,8 +115,8 @@ SECTION_KEYS = {
                               "fft_threads)", (0, 1.5)),
     },
     "sequence": {
-        "response": Key("-", _choices(RESPONSES[:1]), "the elastic response: the static one plus radiation damping "
-                        "(\"dynamic\", the full history at a variable step, is not available yet)", ("dynamic", "qd")),
+        "response": Key("-", _choices(RESPONSES), "the elastic response: \"quasi_dynamic\" (the static one plus "
+                        "radiation damping) or \"dynamic\" (the full history, exact at a variable step)", ("qd", 1)),
         "plate_rate_1": Key("velocity", f">= 0, in {SCALE_RANGE} or 0; this or plate_rate_3 > 0", "plate rate along x1",
                             (-1e-9, NAN)),
         "plate_rate_3": Key("velocity", f">= 0, in {SCALE_RANGE} or 0", "plate rate along x3", (-1e-9, INF)),

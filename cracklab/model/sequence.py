@@ -21,16 +21,19 @@ STEPS_ESTIMATE = 100_000
 class Sequence:
     """A sequence scene's loading, time step and recording.
 
-    * ``response``: "quasi_dynamic" (the static response plus radiation damping);
-      "dynamic" (the full elastodynamic history at a variable step) is refused for now.
+    * ``response``: "quasi_dynamic" (the static response plus radiation damping) or
+      "dynamic" (the full elastodynamic response, its history exact at a variable step).
     * ``plate_rate_1``, ``plate_rate_3``: the plate rate V_p along each shear component
       (velocity, >= 0, not both 0). The ``creep`` region (a mask; None: none) slides at it
       kinematically, and a spring of ``stiffness`` (stress per length, >= 0) on the mean
       slip pulls the plane at it: tau += k (V_p t - mean slip).
     * ``tolerance``: the relative error of a step (slip against L + |slip|, state against
       a); ``dt_min``, ``dt_max``, ``dt_first``: the step's bounds and the first step tried
-      (time; None: 1e-3 dx / c_s, t_end / 50, dx / c_s); ``pair``: the embedded
-      Runge-Kutta pair ("dormand_prince", order 5; "bogacki_shampine", order 3).
+      (time; None: 1e-3 dx / c_s, or the dynamic step beta dx / c_s with the dynamic
+      response, t_end / 50, dx / c_s); ``pair``: the embedded Runge-Kutta pair of the
+      quasi-dynamic response ("dormand_prince", order 5; "bogacki_shampine", order 3). The
+      dynamic response steps by a predictor-corrector (order 2) and takes a step of dt_min
+      whatever its error: that is the fixed-step ruptures' step.
     * Recording: the stations and the largest slip rate every ``station_every`` accepted
       steps; the fields of ``record.fields`` every ``slow_interval`` between events and
       every ``fast_interval`` during them (time; None: t_end / 100 and 100 dx / c_s), and
@@ -57,9 +60,6 @@ class Sequence:
         check_fields_nesting(self, "sequence")
         if not isinstance(self.response, str) or self.response not in RESPONSES:
             raise InputError("sequence.response", f"must be one of {', '.join(RESPONSES)}, got {self.response!r}")
-        if self.response == "dynamic":
-            raise InputError("sequence.response", "'dynamic' (the full elastodynamic history at a variable step) "
-                                                  "is not available yet; use 'quasi_dynamic'")
         for name in ("plate_rate_1", "plate_rate_3", "stiffness"):
             object.__setattr__(self, name, _number(f"sequence.{name}", getattr(self, name), allow_zero=True))
         for name in ("tolerance", "event_threshold"):
@@ -90,10 +90,12 @@ class Sequence:
         """{component: V_p} of the components the plate moves along (V_p > 0)."""
         return {c: v for c, v in ((1, self.plate_rate_1), (3, self.plate_rate_3)) if v > 0}
 
-    def steps(self, dx=None, cs=None, t_end=None) -> tuple[float, float, float]:
+    def steps(self, dx=None, cs=None, t_end=None, beta=None) -> tuple[float, float, float]:
         """(dt_min, dt_max, dt_first), the defaults filled in from the grid spacing ``dx``, the
-        shear wave speed ``cs`` and ``t_end`` (None: only the given bounds checked)."""
-        dt_min = self.dt_min if self.dt_min is not None or dx is None else 1e-3 * dx / cs
+        shear wave speed ``cs``, ``t_end`` and the scene's ``beta`` (None: only the given
+        bounds checked)."""
+        floor = beta if self.response == "dynamic" and beta is not None else 1e-3
+        dt_min = self.dt_min if self.dt_min is not None or dx is None else floor * dx / cs
         dt_max = self.dt_max if self.dt_max is not None or t_end is None else t_end / 50.0
         dt_first = self.dt_first if self.dt_first is not None or dx is None else dx / cs
         if dt_min is not None and dt_max is not None and dt_min > dt_max:

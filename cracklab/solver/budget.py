@@ -227,16 +227,33 @@ def calibrate(scene, *, steps: int = 12, seconds: float = 3.0) -> dict:
 
 def _sequence_memory(scene, store) -> MemoryEstimate:
     """A sequence run (solver/sequence): the unknowns and the pair's stages, the traction
-    and the transforms' arrays, the snapshots kept (all of them without a store; the
-    expected count, ``Sequence.expected_rows``) and the station rows."""
+    and the transforms' arrays, the history at a variable step of the dynamic response,
+    the snapshots kept (all of them without a store; the expected count,
+    ``Sequence.expected_rows``) and the station rows."""
     grid, rec = scene.grid, scene.record
     N = grid.shape[0] * grid.shape[1]
     nc = len([c for c in scene.components if c in (1, 3)]) or 1
     stages = 8                                     # Dormand-Prince: seven stages and the new point
     work = (nc + 1) * N * 8 * (stages + 4) + (nc * 6 + 10) * N * 8 + 4 * modes(grid) * 16
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
+    history = _dynamic_history(scene) if scene.sequence.response == "dynamic" else 0
     nsnap, rows = scene.sequence.expected_rows(scene)
     kept = min(nsnap, _FLUSH) if store else nsnap
     snapshots = kept * n1r * n3r * 8 * len(rec.fields)
     series = min(rows, 4096 if store else rows) * (len(rec.stations or {}) * (3 * nc + 1) + 5) * 8 * 2
-    return MemoryEstimate(0, int(work), int(snapshots + series), int(rows))
+    return MemoryEstimate(int(history), int(work), int(snapshots + series), int(rows))
+
+
+def _dynamic_history(scene) -> int:
+    """The variable-step histories of a fully dynamic sequence (history/variable.py): one per
+    channel the slipping components drive, over the modes of q > 0."""
+    from ..elastic.modes import directions
+    from ..history.variable import memory
+
+    grid, mat = scene.grid, scene.material
+    q = np.broadcast_to(directions(grid)[0], grid.spectral_shape).ravel()
+    r = q[q > 0] * mat.cs
+    dt_min = scene.sequence.steps(grid.dx_min, mat.cs, scene.t_end, scene.beta)[0]
+    comps = {c for c in scene.components if c in (1, 3)} | set(scene.sequence.plate)
+    channels = ("II", "III") if not grid.plane and len(comps) == 2 else tuple({1: "II", 3: "III"}[c] for c in comps)
+    return sum(memory(ch, mat.nu, r, dt_min) for ch in channels)

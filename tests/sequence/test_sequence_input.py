@@ -39,7 +39,7 @@ def test_a_sane_scene_builds_and_round_trips_through_toml():
     ({"dt_min": 10.0, "dt_max": 1.0}, "sequence.dt_min", "<= sequence.dt_max"),
     ({"dt_first": 100.0, "dt_max": 10.0}, "sequence.dt_first", "[dt_min, dt_max]"),
     ({"tolerance": 2.0}, "sequence.tolerance", "(0, 1)"),
-    ({"response": "dynamic"}, "sequence.response", "not available yet"),
+    ({"response": "elastic"}, "sequence.response", "quasi_dynamic, dynamic"),
     ({"pair": "euler"}, "sequence.pair", "dormand_prince"),
     ({"station_every": 0}, "sequence.station_every", ">= 1"),
 ])

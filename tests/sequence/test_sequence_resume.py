@@ -59,8 +59,19 @@ def test_the_store_holds_the_in_memory_run_and_verifies(tmp_path):
 
 
 def test_kill_9_and_resume_is_bit_identical(tmp_path):
-    scene = spring_slider(1.2e9)
-    toml = tmp_path / "slider.toml"
+    _kill_and_resume(tmp_path, spring_slider(1.2e9), every=150)
+
+
+def test_kill_9_and_resume_of_a_fully_dynamic_sequence_is_bit_identical(tmp_path):
+    """A BP1-FD on a coarse grid through its first earthquake: the history's rings and
+    states are in the checkpoint."""
+    import cracklab
+
+    _kill_and_resume(tmp_path, cracklab.scenes.bp1(dz=1000.0, depth=80e3, years=230.0, dynamic=True), every=400)
+
+
+def _kill_and_resume(tmp_path, scene, every):
+    toml = tmp_path / "scene.toml"
     scene.to_toml(toml)
     ref_proc = _start(toml, tmp_path / "ref.zarr")
     _, err = ref_proc.communicate(timeout=300)
@@ -69,7 +80,7 @@ def test_kill_9_and_resume_is_bit_identical(tmp_path):
     out = tmp_path / "out.zarr"
     last, rng = -1, np.random.default_rng(1)
     for attempt in range(2):
-        proc = _start(toml, out, "--checkpoint-every", "150", *(["--resume"] if attempt else []), sleep=0.3)
+        proc = _start(toml, out, "--checkpoint-every", str(every), *(["--resume"] if attempt else []), sleep=0.3)
         deadline = time.monotonic() + 120
         while (_checkpoint_n(out) or -1) <= last and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.02)

@@ -36,6 +36,16 @@ def error_norm(system, y_new, err, tolerance):
     return float(ratio[i]), int(np.flatnonzero(keep)[i])
 
 
+def end_step(t, t_end, h, dt_min, split=False):
+    """(step, whether it ends the run) for a step of ``h`` from ``t``: the rest of the run when
+    h reaches t_end or would leave less than dt_min of it, unless ``split`` (that step
+    failed: steps of h until the end)."""
+    if split:
+        return h, t + h >= t_end * (1 - 1e-15)
+    last = t + h >= t_end * (1 - 1e-15) or t_end - (t + h) < dt_min
+    return (t_end - t if last else h), last
+
+
 def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None):
     """Accepted steps from (t0, y0) until t_end (the last step ends on it): a generator of
     :class:`Accepted`. ``dt``: the first step to try (default ``control.dt_first``); ``n0``:
@@ -52,10 +62,9 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
     k[0] = system.rates(t, y) if rates is None else np.array(rates, dtype=float)
     n = n0
     while t < t_end:
-        rejected = 0
+        rejected, split = 0, False
         while True:
-            last = t + h >= t_end * (1 - 1e-15) or t_end - (t + h) < control.dt_min
-            step = t_end - t if last else h
+            step, last = end_step(t, t_end, h, control.dt_min, split)
             y_new, err, ok = _try(system, pair, A, b, e, k, t, y, step)
             size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
             if size <= 1.0:
@@ -64,6 +73,8 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
             if step <= control.dt_min * (1 + 1e-12):
                 raise SimulationError(_failure(system, t, step, y, y_new, err, where, control.tolerance))
             h = control.next_step(step, size, pair.order, accepted=False)
+            if last and not split:      # the step that reaches t_end failed: try shorter ones
+                h, split = min(h, 0.5 * step), True
         h_next = control.next_step(step, size, pair.order, accepted=True) if not last else h
         t, y = (t_end if last else t + step), y_new
         if pair.fsal:

@@ -1,5 +1,6 @@
-"""A sequence scene's run: the quasi-dynamic system of the scene (quasi_dynamic.py), its
-step control and pair, stepped by :func:`integrate.integrate`, resumable from its state."""
+"""A sequence scene's run: the system of the scene (quasi_dynamic.py, or dynamic.py for the
+fully dynamic response), its step control, stepped by :func:`integrate.integrate` with the
+scene's pair or by :func:`predictor_corrector.integrate_dynamic`, resumable from its state."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,8 +8,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .control import StepControl
+from .dynamic import FullyDynamic
 from .integrate import integrate
 from .pairs import PAIRS
+from .predictor_corrector import integrate_dynamic
 from .quasi_dynamic import QuasiDynamic
 
 
@@ -29,7 +32,8 @@ class SequenceState:
 
 
 def system_of(scene, transforms=None) -> QuasiDynamic:
-    """The quasi-dynamic system of a sequence scene."""
+    """The system of a sequence scene: :class:`QuasiDynamic`, or :class:`FullyDynamic` at
+    steps no shorter than the scene's dt_min."""
     seq, law, grid = scene.sequence, scene.law, scene.grid
     comps = sorted({c for c in scene.components if c in (1, 3)} | set(seq.plate))
     tau0 = {c: scene.loading.field(c) for c in comps}
@@ -38,8 +42,15 @@ def system_of(scene, transforms=None) -> QuasiDynamic:
     else:
         sigma = np.maximum(0.0, -np.asarray(scene.loading.field(2), dtype=float))
     plate = {c: {1: seq.plate_rate_1, 3: seq.plate_rate_3}[c] for c in comps}
-    return QuasiDynamic(scene.material, grid, law, tau0, sigma, plate, creep=seq.creep, stiffness=seq.stiffness,
-                        transforms=transforms)
+    args = (scene.material, grid, law, tau0, sigma, plate)
+    if seq.response == "dynamic":
+        dt_min = _steps(scene)[0]
+        return FullyDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, h_floor=dt_min)
+    return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms)
+
+
+def _steps(scene):
+    return scene.sequence.steps(scene.grid.dx_min, scene.material.cs, scene.t_end, scene.beta)
 
 
 class SequenceRun:
@@ -50,9 +61,10 @@ class SequenceRun:
         self.scene = scene
         seq = scene.sequence
         self.system = system_of(scene)
-        dt_min, dt_max, dt_first = seq.steps(scene.grid.dx_min, scene.material.cs, scene.t_end)
+        dt_min, dt_max, dt_first = _steps(scene)
         self.control = StepControl(tolerance=seq.tolerance, dt_min=dt_min, dt_max=dt_max, dt_first=dt_first)
         self.pair = PAIRS[seq.pair]
+        self.dynamic = seq.response == "dynamic"
         self.n, self.t, self.dt_next = 0, 0.0, dt_first
         self.y = self.system.initial()
         self.rates = None       # dy/dt at (t, y), from the last accepted step
@@ -64,13 +76,16 @@ class SequenceRun:
         return {"n": self.n, "t": self.t, "dt_next": self.dt_next, "y": self.y.copy(),
                 "lnV": None if lnV is None else lnV.copy(),
                 "rates": None if self.rates is None else self.rates.copy(),
-                "last": None if self.system.last is None else list(self.system.last)}
+                "last": None if self.system.last is None else list(self.system.last),
+                **({"system": self.system.get_state()} if self.dynamic else {})}
 
     def set_state(self, state: dict) -> None:
         self.n, self.t, self.dt_next = int(state["n"]), float(state["t"]), float(state["dt_next"])
         self.y = np.array(state["y"], dtype=float)
         self.system.lnV = None if state["lnV"] is None else np.array(state["lnV"], dtype=float)
         self.rates = None if state["rates"] is None else np.array(state["rates"], dtype=float)
+        if self.dynamic:
+            self.system.set_state(state["system"])
         last = state.get("last")
         self.system.last = None if last is None else (np.array(last[0]), {int(c): np.array(a) for c, a in
                                                                           last[1].items()},
@@ -92,7 +107,12 @@ class SequenceRun:
     def __iter__(self):
         if self.n == 0:
             yield self.state()
-        for acc in integrate(self.system, self.y, self.t, self.scene.t_end, self.pair, self.control,
-                             dt=self.dt_next, n0=self.n, rates=self.rates):
+        if self.dynamic:
+            steps = integrate_dynamic(self.system, self.y, self.t, self.scene.t_end, self.control, dt=self.dt_next,
+                                      n0=self.n, rates=self.rates)
+        else:
+            steps = integrate(self.system, self.y, self.t, self.scene.t_end, self.pair, self.control,
+                              dt=self.dt_next, n0=self.n, rates=self.rates)
+        for acc in steps:
             self.n, self.t, self.y, self.dt_next, self.rates = acc.n, acc.t, acc.y, acc.dt_next, acc.rates
             yield self.state(acc.dt)

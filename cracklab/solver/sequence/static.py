@@ -10,7 +10,6 @@ rotated by Eq. (28) in 3D. The q = 0 mode carries no static traction; a spring o
 stiffness k on it (the mean slip) loads the plane as a slider, F_0 = -k D_0."""
 from __future__ import annotations
 
-
 from ...elastic.kernels import static_integral
 from ...elastic.modes import directions
 from ..loops import rotate
@@ -27,7 +26,8 @@ class StaticResponse:
     def __init__(self, material, grid, components, stiffness=0.0, transforms=None):
         self.components = tuple(sorted(components))
         self.fft = transforms or Transforms(grid)
-        q, self.c, self.s = directions(grid)
+        self.q, self.c, self.s = directions(grid)
+        q = self.q
         self.rotated = (not grid.plane) and 1 in self.components and 3 in self.components
         # -(mu q / 2) int C dT per channel, for an identical pair (mu / 2 per side's half of the jump)
         self.factor = {CHANNEL[c]: -0.5 * material.mu * q * static_integral(CHANNEL[c], material.nu)
@@ -35,18 +35,32 @@ class StaticResponse:
         self.stiffness = float(stiffness)
         self.zero = (0, 0)     # the q = 0 mode in the spectral layout
 
+    def spectra(self, fields: dict) -> tuple[dict, dict]:
+        """({channel: spectrum}, {component: its q = 0 mode}) of {component: field} (Eq. 28's
+        rotation in 3D shear)."""
+        X = self.fft.forward_components({c: fields[c] for c in self.components})
+        zeros = {c: X[c][self.zero] for c in self.components}
+        if not self.rotated:
+            return {CHANNEL[c]: X[c] for c in self.components}, zeros
+        out = dict(zip(("II", "III"), rotate(self.c, self.s, X[1], X[3])))
+        if 2 in self.components:
+            out["I"] = X[2]
+        return out, zeros
+
+    def fields(self, F: dict, zeros: dict) -> dict:
+        """{component: field} of the channels' spectra ``F``; the q = 0 mode of each component
+        is the spring's -k times the slip's (``zeros``, from :meth:`spectra`)."""
+        if self.rotated:
+            out = dict(zip((1, 3), rotate(self.c, self.s, F["II"], F["III"], inverse=True)))
+            if 2 in self.components:
+                out[2] = F["I"]
+        else:
+            out = {c: F[CHANNEL[c]] for c in self.components}
+        for c in self.components:
+            out[c][self.zero] = -self.stiffness * zeros[c]
+        return self.fft.inverse_components(out)
+
     def traction(self, delta: dict) -> dict:
         """{component: the static traction of the slip ``delta``} ({component: field})."""
-        X = self.fft.forward_components({c: delta[c] for c in self.components})
-        means = {c: X[c][self.zero] for c in self.components}
-        if self.rotated:
-            II, III = rotate(self.c, self.s, X[1], X[3])
-            F = dict(zip((1, 3), rotate(self.c, self.s, self.factor["II"] * II, self.factor["III"] * III,
-                                        inverse=True)))
-            if 2 in self.components:
-                F[2] = self.factor["I"] * X[2]
-        else:
-            F = {c: self.factor[CHANNEL[c]] * X[c] for c in self.components}
-        for c in self.components:
-            F[c][self.zero] = -self.stiffness * means[c]
-        return self.fft.inverse_components(F)
+        X, zeros = self.spectra(delta)
+        return self.fields({ch: self.factor[ch] * x for ch, x in X.items()}, zeros)

@@ -1,0 +1,121 @@
+"""Slip and state of a rate-and-state plane, fully dynamic, at a variable step (docs/reference/
+equations.md, "Sequences: the dynamic response at a variable step"): the quasi-dynamic
+system (quasi_dynamic.py) with the static response replaced by the whole of Eq. (33),
+
+    F_j = -(mu q / 2) Z(0) D_j + (mu q / 2) int_0^t Z(q c_s (t - s)) V_j(s) ds   (per channel)
+
+the convolution kept exactly by the history at a variable step (history/variable.py) for
+a slip rate linear over each step. The radiation damping -eta V of step (v) is Eq. (3)'s
+own; the convolution gives it back as the plane slows down (int_0^inf Z = 1 for II and III),
+so between events the traction is the static one. Before t = 0 the plane did not move.
+
+The convolution at the end of a step depends on the slip rate there: the step is a
+predictor-corrector (:func:`steps`, Lapusta et al. 2000's, with the history exact), whose
+two slip-rate estimates give the error of the step."""
+from __future__ import annotations
+
+import numpy as np
+
+from ...history.variable import VariableHistory
+from .quasi_dynamic import QuasiDynamic
+from .static import StaticResponse
+
+
+class DynamicResponse:
+    """The traction of Eq. (33) between two identical half spaces of ``material`` on ``grid``
+    for the slipping ``components``, at steps no shorter than ``h_floor``; ``stiffness``: the
+    spring on the mean slip (static.py).
+
+    Per step: :meth:`prepare` (h), then :meth:`traction` (slip, slip rate at the step's end)
+    as often as the step needs, then :meth:`commit` (the end's slip rate)."""
+
+    def __init__(self, material, grid, components, h_floor, stiffness=0.0, transforms=None):
+        self.static = StaticResponse(material, grid, components, stiffness=stiffness, transforms=transforms)
+        q = np.broadcast_to(self.static.q, grid.spectral_shape)
+        self.moving = np.flatnonzero(q.ravel() > 0)         # the q = 0 mode has no history
+        qm = q.ravel()[self.moving]
+        self.dynamic = 0.5 * material.mu * qm
+        X, _ = self.static.spectra({c: np.zeros(grid.shape) for c in self.static.components})
+        self.engines = {ch: VariableHistory(ch, material.nu, qm * material.cs, h_floor) for ch in X}
+        self._AB = None
+
+    def start(self, v: dict) -> None:
+        """The slip rate at t = 0."""
+        V, _ = self.static.spectra(v)
+        for ch, eng in self.engines.items():
+            eng.start(V[ch].ravel()[self.moving])
+
+    def prepare(self, h: float) -> None:
+        self._AB = {ch: eng.prepare(h) for ch, eng in self.engines.items()}
+
+    def traction(self, delta: dict, v_end: dict) -> dict:
+        """{component: F} at the end of the step prepared, for the slip ``delta`` there and a
+        slip rate growing linearly to ``v_end`` over the step."""
+        X, zeros = self.static.spectra(delta)
+        V, _ = self.static.spectra(v_end)
+        F = {}
+        for ch, x in X.items():
+            f = self.static.factor[ch] * x
+            A, B = self._AB[ch]
+            flat = f.reshape(-1)
+            flat[self.moving] += self.dynamic * (A + B * V[ch].reshape(-1)[self.moving])
+            F[ch] = f
+        return self.static.fields(F, zeros)
+
+    def commit(self, v_end: dict) -> None:
+        V, _ = self.static.spectra(v_end)
+        for ch, eng in self.engines.items():
+            eng.commit(V[ch].reshape(-1)[self.moving])
+        self._AB = None
+
+    def get_state(self) -> dict:
+        return {ch: eng.get_state() for ch, eng in self.engines.items()}
+
+    def set_state(self, state: dict) -> None:
+        for ch, eng in self.engines.items():
+            eng.set_state(state[ch])
+
+
+class FullyDynamic(QuasiDynamic):
+    """The fully dynamic system of the same values as :class:`QuasiDynamic`, at steps no
+    shorter than ``h_floor`` (a Scene's dt = beta dx / c_s by default)."""
+
+    def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None,
+                 h_floor=None):
+        super().__init__(material, grid, law, tau0, sigma, plate, creep=creep, stiffness=stiffness,
+                         transforms=transforms)
+        self.response = DynamicResponse(material, grid, self.comps, h_floor, stiffness=self.stiffness,
+                                        transforms=self.static.fft)
+        self.static = self.response.static
+        self.v_end = None       # {component: the slip rate the step's end is taken at}
+        self.started = False    # whether the history holds t = 0 (before: no convolution)
+
+    def start(self, f):
+        """Start the history with the slip rates of the rates ``f`` at t = 0."""
+        self.response.start(self.grids(self.velocities(f)))
+        self.started = True
+
+    def traction(self, t, y):
+        if not self.started:      # t = 0: no history
+            return super().traction(t, y)
+        delta, _ = self.split(y)
+        shape = self.grid.shape
+        F = self.response.traction({c: delta[c].reshape(shape) for c in self.comps},
+                                   {c: self.v_end[c].reshape(shape) for c in self.comps})
+        return {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+
+    def velocities(self, dy):
+        """{component: slip rate} of the rates ``dy``."""
+        dd, _ = self.split(dy)
+        return {c: dd[c] for c in self.comps}
+
+    def grids(self, v):
+        shape = self.grid.shape
+        return {c: v[c].reshape(shape) for c in self.comps}
+
+    def get_state(self) -> dict:
+        return {"history": self.response.get_state()}
+
+    def set_state(self, state: dict) -> None:
+        self.response.set_state(state["history"])
+        self.started = True

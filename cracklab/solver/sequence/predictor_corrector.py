@@ -1,0 +1,78 @@
+"""The step of the fully dynamic sequences (dynamic.py; docs/reference/equations.md,
+"Sequences: the dynamic response at a variable step"): a predictor-corrector in the manner
+of Lapusta et al. (2000), with y = (slip, state) and f = dy/dt = (slip rate, state rate):
+
+    predict:  y* = y_n + h f_n,              f* = f(t_n + h, y*; history with V(t_n + h) = V_n)
+    correct:  y' = y_n + h (f_n + f*) / 2,   f' = f(t_n + h, y'; history with V(t_n + h) = V*)
+
+and the end's slip rate V' = f' is pushed into the history. The error of the step is
+y' - y* = h (f* - f_n) / 2 (Euler against the trapezoid: an embedded pair of order 2),
+held within the tolerance as the quasi-dynamic pairs are (integrate.py); but no step is
+shorter than ``control.dt_min``, the dynamic step beta dx / c_s: a step there is taken
+whatever its estimate, as the fixed-step ruptures are (it is their step)."""
+from __future__ import annotations
+
+import numpy as np
+
+from ...errors import SimulationError
+from .integrate import Accepted, end_step, error_norm
+
+ORDER = 2
+
+
+def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=None):
+    """Accepted steps of the fully dynamic ``system`` from (t0, y0) until t_end: a generator
+    of :class:`integrate.Accepted`, as :func:`integrate.integrate`. ``rates``: f at (t0, y0)
+    when known (a resumed run's; its history is the system's state)."""
+    t, y = float(t0), np.array(y0, dtype=float)
+    h = max(float(dt or control.dt_first), control.dt_min)
+    if rates is None:
+        f = system.rates(t, y)
+        system.start(f)
+    else:
+        f = np.array(rates, dtype=float)
+    n = n0
+    floor = control.dt_min * (1 + 1e-12)
+    while t < t_end:
+        rejected, split = 0, False
+        while True:
+            step, last = end_step(t, t_end, h, control.dt_min, split)
+            y_new, f_new, err, ok = _try(system, t, y, f, step)
+            size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
+            if size <= 1.0 or (ok and step <= floor):
+                break
+            if step <= floor:
+                raise SimulationError(_failure(system, t, step, y, where))
+            rejected += 1
+            h = control.next_step(step, size, ORDER, accepted=False)
+            if last and not split:      # the step that reaches t_end failed: try shorter ones
+                h, split = min(h, 0.5 * step), True
+        h_next = control.next_step(step, size, ORDER, accepted=True) if not last else h
+        system.response.commit(system.grids(system.velocities(f_new)))
+        t, y, f = (t_end if last else t + step), y_new, f_new
+        n += 1
+        yield Accepted(n, t, y, step, h_next, rejected, f)
+        h = h_next
+
+
+def _try(system, t, y, f, h):
+    """(y', f', error estimate, whether the rates stayed finite) of one step of ``h``."""
+    system.response.prepare(h)
+    try:
+        system.v_end = system.velocities(f)
+        y_p = y + h * f
+        f_p = system.rates(t + h, y_p)
+        y_c = y + 0.5 * h * (f + f_p)
+        system.v_end = system.velocities(f_p)
+        f_c = system.rates(t + h, y_c)
+    except (SimulationError, FloatingPointError):
+        return y, f, np.full_like(y, np.nan), False
+    return y_c, f_c, 0.5 * h * (f_p - f), bool(np.all(np.isfinite(y_c)) and np.all(np.isfinite(f_c)))
+
+
+def _failure(system, t, h, y, where) -> str:
+    n = system.n
+    part, i = divmod(max(where, 0), n)
+    node = tuple(int(v) for v in np.unravel_index(i, system.grid.shape))
+    return (f"the fully dynamic step gave non-finite values at the dynamic step dt = {h:.3g} s: at t = {t:.9g} s, "
+            f"node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}); lower beta")
