@@ -57,7 +57,7 @@ BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3"
               help="Also write the result as one JSON object to this file.")
 def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, bimaterial,
           as_json, output) -> None:
-    """Median cost per step (second half of the run) and a same-process FFT pair."""
+    """Median cost per step (second half of the run), a same-process FFT pair and the step by stage."""
     from .bench import run as run_bench
     from ..errors import InputError
 
