@@ -41,11 +41,13 @@ SLOW = frozenset({
     "tests/output/test_store_integrity.py::test_kill_during_the_final_write_leaves_a_store_not_complete",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
+    "tests/studies/test_studies_quick.py::test_performance_study_stages_quick",
     "tests/studies/test_regression_tools.py::test_tiny_case_is_identical_across_fresh_processes",
     "tests/laws/test_rate_state.py::test_the_fast_pass_compiles_to_vector_code",
     "tests/history/test_compile_order.py::test_engine_sums_do_not_depend_on_the_compile_order",
     # big grids
     "tests/solver/test_budget.py::test_the_estimate_agrees_with_the_peak_resident_memory",
+    "tests/solver/test_budget.py::test_the_estimate_agrees_with_the_peak_of_a_bimaterial_and_a_rate_state_run",
     # kernel fits and the bimaterial faces' tables, from empty caches
     "tests/solver/test_face_kernels.py::test_exponential_fits_of_the_face_kernels",
     "tests/history/test_fast_engine.py::test_cache_round_trip_and_corruption",

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 
 import resource
+import threading
 import time
 
 import numpy as np
@@ -150,6 +151,86 @@ def fft_pair_ms(grid, repeats=50, threads=1, components=(2,)):
 #: in the timed half of a bench, one FFT pair is timed after every PAIR_EVERY-th step
 PAIR_EVERY = 10
 
+#: the stages of a step that ``run`` reports (``stages_ms``), in order: the transforms
+#: (Transforms' calls), the engines' advance of their states and start-up weights (push's
+#: advance, launch, start_weight), the caller's wait for an advance that runs on the engines'
+#: worker thread (the engine's join less any advance the caller does in it: zero without the
+#: overlap), the taps (push less its advance and wait), the law (update, strength, solve,
+#: applied_strength) and the glue (the rest of the step: the scheme's passes, the load, the
+#: growth check)
+STAGES = ("transforms", "advance", "wait", "taps", "law", "glue")
+#: in the timed half, the steps alternate in blocks of STAGE_BLOCK: plain (the median
+#: ``ms_per_step``), then timed by stage (``stages_ms``); a block spans every eighth of the
+#: exponential engine's staggered advance
+STAGE_BLOCK = 8
+
+
+class StageClock:
+    """Exclusive time per stage on the thread that made it (a stage's call inside another's
+    counts for the inner one only), through wrappers that :meth:`install` sets on the
+    instances a step calls and :meth:`remove` takes off again: only a bench's timed steps
+    carry them, and the library's code is not touched. A wrapped call on another thread
+    (the engines' worker) is summed in ``worker`` instead."""
+
+    def __init__(self, stepper):
+        self.thread = threading.get_ident()
+        self.spent = dict.fromkeys(STAGES[:-1], 0.0)
+        self.worker = 0.0
+        self._stack, self._mark = [], 0.0
+        response, law = stepper.response, stepper.scene.law
+        engines = [ch.engine for ch in response.channels.values()]
+        targets = [(response.fft, name, "transforms") for name in
+                   ("forward", "inverse", "forward_components", "inverse_components", "forward_pair", "inverse_pair")]
+        targets += [(law, name, "law") for name in ("update", "strength", "solve", "applied_strength")]
+        for engine in engines:
+            targets += [(engine, "push", "taps"), (engine, "launch", "advance")]
+            targets += [(engine, name, stage) for name, stage in
+                        (("_advance", "advance"), ("_join", "wait"), ("start_weight", "advance"))
+                        if hasattr(engine, name)]
+        self._targets = [t for t in targets if hasattr(t[0], t[1])]
+        self.installed = False
+
+    def _timed(self, stage, fn):
+        clock = self
+
+        def call(*args, **kwargs):
+            if threading.get_ident() != clock.thread:
+                t0 = time.perf_counter()
+                try:
+                    return fn(*args, **kwargs)
+                finally:
+                    clock.worker += time.perf_counter() - t0
+            now = time.perf_counter()
+            if clock._stack:
+                clock.spent[clock._stack[-1]] += now - clock._mark
+            clock._stack.append(stage)
+            clock._mark = now
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                now = time.perf_counter()
+                clock.spent[clock._stack.pop()] += now - clock._mark
+                clock._mark = now
+
+        return call
+
+    def install(self) -> None:
+        """Time the stages from now on (instance attributes over the classes' methods; a
+        frozen law takes them through object.__setattr__)."""
+        for obj, name, stage in self._targets:
+            object.__setattr__(obj, name, self._timed(stage, getattr(obj, name)))
+        self.installed = True
+
+    def remove(self) -> None:
+        """Back to the classes' own methods."""
+        for obj, name, _ in self._targets:
+            object.__delattr__(obj, name)
+        self.installed = False
+
+    def read(self) -> dict:
+        """Seconds spent so far per stage (but glue) on the clock's thread."""
+        return dict(self.spent)
+
 
 def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine_threads=None, fit_steps=None,
         law="traction_free", free_surface=False, bimaterial=False):
@@ -165,6 +246,15 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     second half and the most evaluations one solve took. ``free_surface``: the half plane
     below a free surface (``Grid(free_surface=True)``: cosine and sine transforms along x3;
     the FFT baseline is then the pair of an even component, cosine transform and real FFT).
+
+    Where the time goes: the timed half alternates blocks of STAGE_BLOCK plain steps (the
+    median ``ms_per_step``, ``timed_steps``) with blocks timed by stage (:class:`StageClock`):
+    ``stages_ms``, the median ms per step of each of STAGES, ``stages_total_ms`` the median
+    of those steps (the stages' medians sum to about it, and it is the plain step's cost
+    plus the clock's own, a few microseconds per wrapped call), ``stage_steps`` their count.
+    With the overlap (two or more engine threads) the advance on the worker is not in the
+    step's stages; the caller's ``wait`` for it is, and ``worker_ms`` is the worker's busy
+    time per step (the wrapped advances and start-up weights it ran).
     """
     scene = bench_scene(n1, n3, mode, nsteps, engine, threads, engine_threads, law, free_surface, bimaterial)
     stepper = Stepper(scene, interface_for_scene(scene, Transforms(scene.grid, threads), nsteps=fit_steps))
@@ -178,10 +268,19 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         it = tqdm(it, total=scene.nsteps + 1, unit="step", desc="bench")
     half = (scene.nsteps + 1) // 2  # the second half is timed
     durations, pairs, counted, skip = [], [], 0, False
+    clock, staged, before = StageClock(stepper), [], None
     newton = (None, None)
     t0 = time.perf_counter()
     for n, _ in enumerate(it):
-        durations.append(np.nan if skip else time.perf_counter() - t0)
+        elapsed = time.perf_counter() - t0
+        if clock.installed:
+            if not skip:   # this step by stage: its total, then each stage's share
+                after = clock.read()
+                staged.append([elapsed] + [after[s] - before[s] for s in STAGES[:-1]])
+            durations.append(np.nan)
+            clock.remove()
+        else:
+            durations.append(np.nan if skip else elapsed)
         skip = False
         if n == half - 1:
             counted = response.fft.count
@@ -192,7 +291,12 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
             response.wait()
             pairs.append(pair())
             skip = True
+        if n + 1 >= half and ((n + 1 - half) // STAGE_BLOCK) % 2 == 1:
+            clock.install()
+            before = clock.read()
         t0 = time.perf_counter()
+    if clock.installed:
+        clock.remove()
     timed = np.asarray(durations[half:])
     transforms = (response.fft.count - counted) / max(1, timed.size)
     evaluations, solves = (None, None)
@@ -202,6 +306,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         evaluations, solves = ((end[i] - newton[i]) / points_steps for i in (0, 1))
     timed = timed[np.isfinite(timed)]
     ms = 1e3 * float(np.median(timed))
+    stages = stage_breakdown(staged)
     pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads,
                                                                       components=scene.components)
     return {
@@ -217,6 +322,10 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "transforms_per_step": transforms,
         "fft_floor_ms": 0.5 * transforms * pair_ms,
         "fit_steps": max(scene.nsteps, fit_steps or 0),
+        "stage_steps": len(staged),
+        "stages_ms": stages,
+        "stages_total_ms": 1e3 * float(np.median([row[0] for row in staged])) if staged else None,
+        "worker_ms": 1e3 * clock.worker / len(staged) if overlap and staged else None,
         "terms": {name: getattr(ch.engine, "pairs", None) for name, ch in response.channels.items()},
         "fft_backend": backend_name(),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
@@ -224,6 +333,16 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "newton_solves_per_point_step": solves,
         "newton_most_evaluations": stepper.lstate.get("newton_most") if evaluations is not None else None,
     }
+
+
+def stage_breakdown(rows) -> dict | None:
+    """{stage: median ms per step} of the steps timed by stage, ``rows`` of [total, then the
+    seconds of each stage of STAGES but glue]; glue is each step's total less its stages."""
+    if not rows:
+        return None
+    a = np.asarray(rows, dtype=float)
+    per = np.column_stack([a[:, 1:], a[:, 0] - a[:, 1:].sum(axis=1)])
+    return {stage: 1e3 * float(np.median(per[:, i])) for i, stage in enumerate(STAGES)}
 
 
 def _newton_counts(state):

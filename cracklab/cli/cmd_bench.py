@@ -57,7 +57,7 @@ BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3"
               help="Also write the result as one JSON object to this file.")
 def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, bimaterial,
           as_json, output) -> None:
-    """Median cost per step (second half of the run) and a same-process FFT pair."""
+    """Median cost per step (second half of the run), a same-process FFT pair and the step by stage."""
     from .bench import run as run_bench
     from ..errors import InputError
 
@@ -82,6 +82,8 @@ def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law,
         click.echo(json.dumps(result))
     else:
         for k, v in result.items():
-            if k.startswith("newton") and v is None:
+            if (k.startswith("newton") or k == "worker_ms") and v is None:
                 continue
+            if k == "stages_ms" and v is not None:
+                v = ", ".join(f"{stage} {ms:.3g}" for stage, ms in v.items())
             click.echo(f"{k:>22}: {v:.4g}" if isinstance(v, float) else f"{k:>22}: {v}")

@@ -9,7 +9,9 @@ The class says, before any is built:
   first such engine that takes the scene's window);
 * ``memory(scene, kernel, scheme, material)``: (bytes held, extra bytes while it is built
   or grows) of one engine of a half space of ``material`` serving the channel of
-  ``kernel`` under ``scheme`` (solver/budget.py sums them).
+  ``kernel`` under ``scheme`` (solver/budget.py sums them);
+* ``extra_at_build``: whether that extra comes while the engine is built (beside the
+  engines built before it) rather than while its history grows (beside every engine).
 
 An instance, built with ``(kernel=, gamma=, nu=, rule=, formulation=, lag=, window=,
 chunk=, threads=, nsteps=)``, answers ``push(x, out=None, scale=None)`` with S_n,

@@ -45,6 +45,7 @@ class DirectEngine:
     name = "direct"
     windowed = True         # it keeps a truncated history (window)
     flat_cost = False       # its step grows with the history
+    extra_at_build = False  # memory's extra: while its buffer and weights grow, every engine built
     CHUNK = 256             # the growth step of its buffer and weight table (``chunk``)
 
     @classmethod

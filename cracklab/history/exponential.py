@@ -240,6 +240,7 @@ class ExponentialEngine:
     name = "exponential"
     windowed = False        # it keeps the whole history
     flat_cost = True
+    extra_at_build = True   # memory's extra: the exact taps and fits while it is built
 
     @classmethod
     def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:

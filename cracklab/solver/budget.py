@@ -9,8 +9,9 @@ process's limits) can give; ``check_memory`` refuses a run, or a sweep's workers
 does not fit, with one ``MemoryBudgetError`` giving both figures. ``calibrate`` times a
 few steps of the run and extrapolates its run time.
 
-The estimate is checked against the peak resident memory of real runs
-(tests/solver/test_budget.py: within a factor 1.5 above the interpreter's own memory).
+The estimate is checked against the peak resident memory of real runs, of one material
+and of two, with slip weakening and with rate and state (tests/solver/test_budget.py:
+within a factor 1.5 above the interpreter's own memory).
 """
 from __future__ import annotations
 
@@ -35,9 +36,11 @@ _FLUSH = 8              # snapshots the recorder keeps before writing them to th
 @dataclass(frozen=True)
 class MemoryEstimate:
     """Estimated bytes of one run, by part: ``history`` (the engines' states), ``work``
-    (work arrays of a step), ``setup`` (the temporaries of the largest engine's set-up,
-    its exact weights and fits, freed before the first step), ``records`` (what the
-    recorder keeps in memory); ``steps``: the run's number of steps."""
+    (work arrays of a step), ``setup`` (what the engines' temporaries add above the history
+    at their peak: an engine's set-up, its exact weights and fits, beside the states of the
+    engines built before it and its own, freed before the first step; or the direct
+    engine's growth), ``records`` (what the recorder keeps in memory); ``steps``: the run's
+    number of steps."""
 
     history: int
     work: int
@@ -48,8 +51,7 @@ class MemoryEstimate:
     @property
     def total(self) -> int:
         """Bytes of the run's arrays at their peak (the interpreter's own memory not
-        included): the set-up's temporaries are counted on top of the rest, as the
-        states of the engines built before it are already held."""
+        included): the set-up's excess over the history on top of the rest."""
         return self.history + self.work + self.setup + self.records
 
     def describe(self) -> str:
@@ -88,23 +90,28 @@ def run_memory(scene, *, store=True) -> MemoryEstimate:
     comps = scene.components
     scheme = scheme_of(scene.formulation)
     engine = ENGINES[resolve_engine(scene.numerics.engine, scene.numerics.window)]
-    # (kernel, material) of each engine the scene's interface builds (the identical pair: one
-    # per channel the active components drive)
-    channels = interface_type(scene.materials).engine_channels(scene)
-    history, building = 0, 0
-    for kernel, material in channels:
+    iface = interface_type(scene.materials)
+    # (kernel, material) of each engine the scene's interface builds, in the order it builds
+    # them (the identical pair: one per channel the active components drive; two materials:
+    # each face's channels of its own material). An engine's set-up temporaries come while
+    # the engines built before it and its own states are held (extra_at_build); an engine
+    # whose extra comes as its history grows has every engine beside it then
+    history, peak, grows = 0, 0, 0
+    for kernel, material in iface.engine_channels(scene):
         held, extra = engine.memory(scene, kernel, scheme, material)
         history += held
-        building = max(building, extra)
+        if engine.extra_at_build:
+            peak = max(peak, history + extra)
+        else:
+            grows = max(grows, extra)
+    building = max(peak - history, grows)
     N = grid.shape[0] * grid.shape[1]
     M = modes(grid)
     nc = len(comps)
-    shear3d = not grid.plane and any(c in comps for c in (1, 3))
-    # per component: slip, rate, traction, f, trial slip and two temporaries of a step;
-    # spectra: two forward slots per component, one per channel, the rotations (3D shear),
-    # the FFT buffers; per mode: q, k1/q, k3/q, gamma and the kernels' prefactors
-    work = (nc * 7 + 6) * N * 8 + (2 * nc + len(channels) + (6 if shear3d else 0) + 2) * M * 16 \
-        + 10 * M * 8
+    # per component: slip, rate, traction, f, trial slip and two temporaries of a step; the
+    # interface's arrays of one value per mode besides its engines (its spectra and prefactors)
+    spectra, reals = iface.mode_arrays(scene)
+    work = (nc * 7 + 6) * N * 8 + spectra * M * 16 + reals * M * 8
     law_fields = sum(1 for v in vars(scene.law).values() if np.ndim(v) == 2) + 4
     load_fields = sum(1 for v in vars(scene.loading).values() if np.ndim(v) == 2)
     work += (law_fields + load_fields) * N * 8

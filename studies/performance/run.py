@@ -2,13 +2,19 @@
 markdown table (docs/studies/performance.md quotes it).
 
     .venv/bin/python studies/performance/run.py [--quick] [--out out/performance]
+    .venv/bin/python studies/performance/run.py --stages [--rounds 3] [--quick]
 
 Each row runs in its own process (`cracklab bench --json`), so peak memory is per row.
+``--stages``: where the time of a step goes (the bench's ``stages_ms``) for mode I, shear
+with slip weakening, shear with rate and state, and bimaterial shear, 256 x 256, the cases
+one after the other in every round; writes stages.json and stages.md (the median round of
+each case).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -31,9 +37,21 @@ QUICK = [(128, 128, "I", 100, "exponential"), (128, 128, "I", 400, "exponential"
 TARGETS = {(256, 256, "I"): 2.0, (512, 512, "I"): 8.0, (512, 512, "shear"): 16.0}
 
 
-def bench(n1, n3, mode, steps, engine, fit_steps=None, *, threads, engine_threads=None):
+#: the cases of the breakdown by stage: (name, mode, law, bimaterial, engine threads)
+STAGE_CASES = [
+    ("mode I", "I", "traction_free", False, 1),
+    ("shear, slip weakening", "shear", "slip_weakening", False, 1),
+    ("shear, rate and state", "shear", "rate_state", False, 1),
+    ("bimaterial shear, slip weakening", "shear", "slip_weakening", True, 1),
+    ("shear, slip weakening, 2 engine threads", "shear", "slip_weakening", False, 2),
+]
+STAGE_GRID, STAGE_STEPS = (256, 256), 400
+STAGE_QUICK = dict(grid=(32, 32), steps=40)
+
+
+def bench(n1, n3, mode, steps, engine, fit_steps=None, *, threads, engine_threads=None, extra=()):
     cmd = [sys.executable, "-m", "cracklab.cli", "bench", "--n1", str(n1), "--n3", str(n3), "--mode", mode,
-           "--steps", str(steps), "--engine", engine, "--threads", str(threads), "--json"]
+           "--steps", str(steps), "--engine", engine, "--threads", str(threads), *extra, "--json"]
     if engine_threads is not None:
         cmd[-1:-1] = ["--engine-threads", str(engine_threads)]
     if fit_steps is not None:
@@ -59,6 +77,45 @@ def table(results) -> str:
     return "\n".join(lines)
 
 
+def stages(rounds=3, quick=False):
+    """The breakdown by stage of every case of STAGE_CASES, ``rounds`` times (the cases in
+    turn within a round): the list of the bench's results, each with "case" and "round"."""
+    (n1, n3), steps = (STAGE_QUICK["grid"], STAGE_QUICK["steps"]) if quick else (STAGE_GRID, STAGE_STEPS)
+    results = []
+    for k in range(rounds):
+        for name, mode, law, bimaterial, eng_t in STAGE_CASES:
+            extra = ["--law", law] + (["--bimaterial"] if bimaterial else [])
+            print(f"round {k + 1}: {name}", flush=True)
+            load = os.getloadavg()[0]
+            res = bench(n1, n3, mode, steps, "exponential", threads=1, engine_threads=eng_t, extra=extra)
+            results.append({**res, "case": name, "round": k, "load": load})
+    return results
+
+
+def stage_table(results) -> str:
+    """Per case, the round of the median step (ratio to its own FFT pair): ms per step and
+    each stage in ms, with the same figure in units of that run's FFT pair in brackets; the
+    engine's worker (overlapped, not in the step's stages) where it runs; the rounds'
+    range of the step's ratio and the host's load average."""
+    from cracklab.cli.bench import STAGES
+
+    head = ["case", "ms / step", "FFT pair ms", "timed by stage"] + list(STAGES) + \
+        ["worker (overlapped)", "step / pair (rounds)", "load"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for name in dict.fromkeys(r["case"] for r in results):
+        rows = sorted((r for r in results if r["case"] == name), key=lambda r: r["ms_per_step"] / r["fft_pair_ms"])
+        r = rows[len(rows) // 2]
+        pair = r["fft_pair_ms"]
+        cell = lambda ms: "-" if ms is None else f"{ms:.2f} ({ms / pair:.1f})"
+        ratios = [x["ms_per_step"] / x["fft_pair_ms"] for x in rows]
+        loads = [x["load"] for x in rows]
+        lines.append(f"| {name} | {cell(r['ms_per_step'])} | {pair:.3f} | {cell(r['stages_total_ms'])} | "
+                     + " | ".join(cell(r["stages_ms"][s]) for s in STAGES)
+                     + f" | {cell(r['worker_ms'])} | {ratios[0]:.1f}-{ratios[-1]:.1f} | "
+                       f"{min(loads):.1f}-{max(loads):.1f} |")
+    return "\n".join(lines)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two small rows only")
@@ -66,9 +123,18 @@ def main(argv=None):
                     help="thread settings to measure, each over every row: N (FFTs and engine) or E/F "
                          "(E engine threads, F FFT threads); default 1 2 2/1")
     ap.add_argument("--out", default="out/performance")
+    ap.add_argument("--stages", action="store_true", help="the breakdown by stage (STAGE_CASES) instead")
+    ap.add_argument("--rounds", type=int, default=3, help="rounds of the breakdown by stage")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.stages:
+        results = stages(args.rounds, args.quick)
+        (out / "stages.json").write_text(json.dumps(results, indent=1))
+        md = stage_table(results)
+        (out / "stages.md").write_text(md + "\n")
+        print(md)
+        return
     results = []
     configs = []
     for spec in args.threads:

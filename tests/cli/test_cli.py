@@ -77,8 +77,9 @@ def test_bench_json():
     for key in ("ms_per_step", "fft_pair_ms", "peak_rss_mb", "engine", "transforms_per_step", "fft_floor_ms"):
         assert key in out
     assert out["ms_per_step"] > 0 and out["fft_pair_ms"] > 0
-    # the baseline was timed within the run (one pair after every 10th of the 10 timed steps)
-    assert out["fft_pairs_timed"] == 1 and out["timed_steps"] == 10
+    # the baseline was timed within the run (one pair after every 10th of the 10 timed
+    # steps, the step after it left out); the timed half alternates 8 plain steps and 8 by stage
+    assert out["fft_pairs_timed"] == 1 and out["timed_steps"] == 8 and out["stage_steps"] == 2
     # mode I, displacement scheme: one transform forward and one back per step
     assert out["transforms_per_step"] == 2
     assert out["fft_floor_ms"] == out["fft_pair_ms"]
@@ -93,6 +94,86 @@ def test_bench_counts_the_shear_transforms():
     assert out["overlap"] and out["fft_pairs_timed"] == 1
     assert out["transforms_per_step"] == 8
     assert out["fft_floor_ms"] == 4 * out["fft_pair_ms"]
+
+
+SLEEP = 0.003
+
+
+def _sleepy_solve(monkeypatch):
+    """TractionFree.solve made SLEEP seconds longer: a step's law stage then has a known
+    least length, long beside the rest of a small step (the host's noise with it)."""
+    import time
+
+    from cracklab.laws import TractionFree
+
+    solve = TractionFree.solve
+
+    def slow(self, *args, **kwargs):
+        time.sleep(SLEEP)
+        return solve(self, *args, **kwargs)
+
+    monkeypatch.setattr(TractionFree, "solve", slow)
+
+
+@pytest.mark.parametrize("mode, solves", [("I", 1), ("shear", 2)])
+def test_bench_reports_the_step_by_stage(monkeypatch, mode, solves):
+    """stages_ms: every stage of bench.STAGES is reported, the time is where it was spent
+    (a law solve made longer shows in the law's stage, not in the glue), and the stages sum
+    to about the step timed by stage, which is about the plain step (the clock's own cost is
+    a few microseconds per wrapped call). The displacement scheme solves the law once per
+    step, the product scheme twice (predictor and step)."""
+    from cracklab.cli.bench import STAGES, run
+
+    _sleepy_solve(monkeypatch)
+    out = run(32, 32, mode, 60, engine="exponential")
+    stages = out["stages_ms"]
+    assert tuple(stages) == STAGES and out["stage_steps"] >= 8 and out["worker_ms"] is None
+    assert stages["law"] >= solves * 1e3 * SLEEP
+    assert stages["glue"] < 0.5 * 1e3 * SLEEP
+    assert stages["transforms"] > 0 and stages["advance"] > 0 and stages["taps"] > 0
+    assert stages["wait"] < stages["advance"]           # no worker: nothing to wait for
+    total = sum(stages.values())
+    assert abs(total / out["stages_total_ms"] - 1) < 0.1, (total, out["stages_total_ms"])
+    assert abs(out["stages_total_ms"] / out["ms_per_step"] - 1) < 0.25, out
+
+
+def test_bench_stages_with_the_overlap(monkeypatch):
+    """With two engine threads the advance runs on the worker: the step's stages count the
+    caller's wait for it, worker_ms the worker's time per step, and the stages still sum to
+    about the step."""
+    from cracklab.cli.bench import run
+
+    _sleepy_solve(monkeypatch)
+    out = run(32, 32, "shear", 60, engine="exponential", engine_threads=2)
+    stages = out["stages_ms"]
+    assert out["overlap"] and out["worker_ms"] > 0
+    # the advance is the worker's: at most the caller's share of it is left on this thread
+    assert stages["advance"] < out["worker_ms"]
+    assert stages["law"] >= 2e3 * SLEEP and stages["glue"] < 0.5 * 1e3 * SLEEP
+    total = sum(stages.values())
+    assert abs(total / out["stages_total_ms"] - 1) < 0.1, (total, out["stages_total_ms"])
+
+
+def test_bench_stage_clock_leaves_nothing_behind():
+    """The clock's wrappers exist only while a step is timed by stage: after the run the
+    transforms, engines and law answer with their classes' own methods again."""
+    from cracklab.cli.bench import StageClock, bench_scene
+    from cracklab.solver.interfaces import for_scene
+    from cracklab.solver.spectral import Transforms
+    from cracklab.solver.stepper import Stepper
+
+    scene = bench_scene(16, 16, "shear", 10, engine="exponential", law="slip_weakening")
+    stepper = Stepper(scene, for_scene(scene, Transforms(scene.grid)))
+    clock = StageClock(stepper)
+    assert len({id(obj) for obj, _, _ in clock._targets}) == 1 + 1 + 2   # transforms, law, two engines
+    clock.install()
+    assert all(name in vars(obj) for obj, name, _ in clock._targets)
+    for _ in zip(range(3), stepper):
+        pass
+    clock.remove()
+    assert sum(clock.read().values()) > 0
+    assert not any(name in vars(obj) for obj, name, _ in clock._targets)
+    assert stepper.scene.law.solve.__func__ is type(stepper.scene.law).solve
 
 
 def test_bench_fit_steps_fixes_the_terms():

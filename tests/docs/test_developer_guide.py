@@ -65,7 +65,7 @@ def test_the_interface_recipe_names_what_an_interface_type_has():
 
     types = list(TYPES.values()) if isinstance(TYPES, dict) else list(TYPES)
     protocol = [n for n in ("accepts", "build", "accepts_scheme", "scheme_error", "margin", "engine_channels",
-                            "energy_refusal", "holds_faces")]
+                            "mode_arrays", "energy_refusal", "holds_faces")]
     names = _named(_section("### Add a half-space type", "### Add a history engine"))
     assert set(protocol) <= set(names), set(protocol) - set(names)
     for n in protocol:

@@ -197,6 +197,28 @@ def test_performance_study_quick_writes_one_table_per_thread_count(tmp_path):
     assert "2 engine threads, 1 FFT thread (the engine's advance overlapped with the FFTs and the law):" in md
 
 
+def test_performance_study_stages_quick(tmp_path):
+    """studies/performance/run.py --stages --quick: every case of the breakdown by stage (mode
+    I, shear with slip weakening and with rate and state, bimaterial, the overlap) as one
+    `cracklab bench --json` each; stages.md has a row per case with every stage
+    (no timing is asserted)."""
+    import json
+
+    from cracklab.cli.bench import STAGES
+
+    perf = _load("performance_study", ROOT / "studies" / "performance" / "run.py")
+    perf.main(["--stages", "--quick", "--rounds", "1", "--out", str(tmp_path)])
+    rows = json.loads((tmp_path / "stages.json").read_text())
+    assert [r["case"] for r in rows] == [c[0] for c in perf.STAGE_CASES]
+    assert [(r["law"], r["bimaterial"], r["overlap"]) for r in rows] == [
+        ("traction_free", False, False), ("slip_weakening", False, False), ("rate_state", False, False),
+        ("slip_weakening", True, False), ("slip_weakening", False, True)]
+    for r in rows:
+        assert tuple(r["stages_ms"]) == STAGES and r["stage_steps"] > 0
+    md = (tmp_path / "stages.md").read_text().splitlines()
+    assert len(md) == 2 + len(rows) and all(s in md[0] for s in STAGES)
+
+
 def test_mirror_cost_study_summary():
     """studies/performance/mirror.py: medians, per-round and fastest ratios of the half plane
     against the periodic and the doubled grids (synthetic runs: no bench here)."""

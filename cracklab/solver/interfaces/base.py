@@ -12,8 +12,9 @@ registered with :func:`register`. The class says, before any is built:
   ``Numerics(formulation="auto")``;
 * ``margin``: the fraction of the smaller side's stable beta a scene may use (and
   ``margin_note``, what the refusal of a larger beta says of it);
-* ``engine_channels(scene)``: the (kernel, material) of each history engine it builds, for
-  the memory estimate (solver/budget.py);
+* ``engine_channels(scene)``: the (kernel, material) of each history engine it builds, in
+  the order it builds them, and ``mode_arrays(scene)``: the (complex, real) arrays of one
+  value per Fourier mode it holds besides them, for the memory estimate (solver/budget.py);
 * ``energy_refusal``: None when the energy budget (analysis/energy.py) covers it, else why not;
 * ``holds_faces``: whether it holds the faces' own motions apart (``face_fields``).
 
@@ -90,7 +91,14 @@ class Interface:
 
     @classmethod
     def engine_channels(cls, scene) -> tuple:
-        """((kernel, material), ...) of the history engines a run of ``scene`` builds."""
+        """((kernel, material), ...) of the history engines a run of ``scene`` builds, in
+        the order it builds them."""
+        raise NotImplementedError
+
+    @classmethod
+    def mode_arrays(cls, scene) -> tuple:
+        """(complex, real): how many arrays of one value per Fourier mode a run of ``scene``
+        holds in its interface besides the engines' own (spectra, prefactors, FFT buffers)."""
         raise NotImplementedError
 
     def settle(self, v_new) -> None:

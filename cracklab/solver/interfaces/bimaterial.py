@@ -105,6 +105,22 @@ class Bimaterial(Interface):
         names = (("L", "N", "LN", "NL") if inplane else ()) + (("T",) if transverse else ())
         return tuple((CHANNELS[name][0], material) for material in scene.materials for name in names)
 
+    #: rows of one value per mode of the compiled passes (``_bind``): complex (V, S, v0, dk,
+    #: H, f, X, O, W), real (e0, st, pre, K, wp, wm, em, den, c and s)
+    BOUND_ROWS = (2 * 3 + 2 * 5 + 2 * 3 + 2 * 3 + 2 * 5 + 2 * 3 + 3 + 3 + 2 * 3,
+                  4 * 2 * 5 + 4 * 3 + 2)
+
+    @classmethod
+    def mode_arrays(cls, scene) -> tuple:
+        """Spectra: the compiled passes' rows (BOUND_ROWS, both faces' five channels
+        whatever parts are active), each channel's f of a face (Face._F), the zero spectrum
+        and the FFT buffers; real: the passes' rows, each channel's static, pre and K terms
+        and its engine's two start-up weights, q, k1/q, k3/q."""
+        inplane, transverse = _parts(scene.grid.plane, scene.components)
+        channels = 2 * ((4 if inplane else 0) + (1 if transverse else 0))
+        spectra, reals = cls.BOUND_ROWS
+        return spectra + channels + 3, reals + 5 * channels + 3
+
     def __init__(self, top, bottom, grid, dt, components, *, formulation="product", engine="direct", window=None,
                  transforms=None, nsteps=None, threads=None, rule=None):
         scheme = scheme_of(formulation)

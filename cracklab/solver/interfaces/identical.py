@@ -29,6 +29,15 @@ class Identical(Interface):
         """One engine per channel the active components drive, of the one material."""
         return tuple((kernel, scene.material) for kernel in active_channels(scene.grid.plane, scene.components))
 
+    @classmethod
+    def mode_arrays(cls, scene) -> tuple:
+        """Spectra: two forward slots per component, an engine output per channel, the
+        rotations (3D shear), the FFT buffers; real: q, k1/q, k3/q, gamma and the channels'
+        prefactors."""
+        comps, plane = scene.components, scene.grid.plane
+        shear3d = not plane and any(c in comps for c in (1, 3))
+        return 2 * len(comps) + len(active_channels(plane, comps)) + (6 if shear3d else 0) + 2, 10
+
     def __init__(self, material, grid, dt, components, **options):
         self.material = material
         self.half = HalfSpace(material, grid, dt, components, scale=0.5, **options)
