@@ -64,7 +64,7 @@ def _member_damage(store, mid):
     listing is damaged (cheap: no data is read; a changed byte raises when read)."""
     if "://" in store:
         return None
-    from ..output.verify import check_member
+    from .checks import check_member
 
     report = check_member(store, mid, read=False)
     if report.ok:

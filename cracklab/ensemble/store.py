@@ -184,7 +184,7 @@ def damage_of(store, member: Member):
     damaged and incomplete (so that no reader takes it, and the sweep runs it again)."""
     if "://" in store:
         return None             # only local stores are verified
-    from ..output.verify import check_member
+    from .checks import check_member
 
     report = check_member(store, member.id)
     if report.ok:
