@@ -255,11 +255,12 @@ class Recorder:
             # last: a kill or a full disk before this leaves a store that is not complete
             self._store_op("marking the store complete" if not error else "marking the store failed",
                            group.attrs.put, final)
-            # then its consolidated metadata, where xarray.open_zarr looks first (no warning)
-            self._store_op("consolidating the store's metadata", _consolidate,
-                           str(self.path) if self.path is not None else self.store)
             if self.path is not None:
                 checkpoint.remove(self.path)
+            # then its consolidated metadata, where xarray.open_zarr looks first (no warning):
+            # of what is there, the checkpoint gone
+            self._store_op("consolidating the store's metadata", _consolidate,
+                           str(self.path) if self.path is not None else self.store)
             return xr.open_zarr(self.store, consolidated=False)
         for name, arr in self.inputs.items():
             extra[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(scene, name))
@@ -278,6 +279,14 @@ def _consolidate(store):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         zarr.consolidate_metadata(store)
+
+
+def _consolidated(path) -> bool:
+    """Whether the run store at ``path`` has consolidated metadata."""
+    from .verify import read_json
+
+    doc, _ = read_json(path / "zarr.json")
+    return isinstance((doc or {}).get("consolidated_metadata"), dict)
 
 
 @contextlib.contextmanager
@@ -368,8 +377,9 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
             if attrs.get("cracklab_status") == "complete":
                 report = verify.check_run(path)
                 if report.ok:
-                    if ck is not None:          # killed after the status, before the clean-up
-                        checkpoint.remove(path)
+                    if ck is not None or not _consolidated(path):   # killed after the status, before the
+                        checkpoint.remove(path)                      # clean-up and the consolidated metadata
+                        _consolidate(str(path))
                     return xr.open_zarr(store, consolidated=False)
                 verify.warn_damaged(path, report, "the run is done again from the start")
                 ck = None

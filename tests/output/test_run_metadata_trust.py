@@ -160,3 +160,23 @@ def test_a_sound_store_says_sound_and_is_served_untouched(store):
     before = {p: p.stat().st_mtime_ns for p in store.rglob("*") if p.is_file()}
     cracklab.simulate(_scene(), store=store, resume=True)
     assert {p: p.stat().st_mtime_ns for p in store.rglob("*") if p.is_file()} == before
+
+
+def test_the_consolidated_metadata_describes_no_removed_checkpoint(tmp_path, monkeypatch):
+    """A run that wrote checkpoints removes them before its consolidated metadata is
+    written (plain xarray showed a `_checkpoint` node that was gone); one killed between
+    its status and that clean-up has both rewritten by the resume."""
+    from cracklab.output import checkpoint as ck
+
+    store = tmp_path / "run.zarr"
+    cracklab.simulate(_scene(), store=store, checkpoint_every=10)
+    assert not (store / ck.GROUP).exists()
+    assert list(xr.open_datatree(store, engine="zarr").children) == []
+    killed = tmp_path / "killed.zarr"
+    monkeypatch.setattr(ck, "remove", lambda path: None)         # killed before the clean-up
+    cracklab.simulate(_scene(), store=killed, checkpoint_every=10)
+    monkeypatch.undo()
+    assert (killed / ck.GROUP).exists() and V.verify(killed).ok
+    cracklab.simulate(_scene(), store=killed, resume=True)
+    assert not (killed / ck.GROUP).exists() and list(xr.open_datatree(killed, engine="zarr").children) == []
+    assert V.verify(killed).ok
