@@ -461,6 +461,41 @@ def stations(result) -> xr.Dataset:
         {"station_x1": "x1", "station_x3": "x3"})
 
 
+def scene_of_store(path):
+    """The scene of the run store at ``path`` (a local directory) from its attrs and input
+    arrays alone, read past the rest of the store (an array whose metadata was changed
+    by hand, which xarray refuses to open); refused when it is not the scene the run
+    recorded (attr ``cracklab_scene_digest``)."""
+    import os
+    from pathlib import Path
+
+    from ..model.scene_io import read_scene_json
+    from .verify import read_json, stored_inputs
+
+    p = Path(path)
+    doc, why = read_json(p / "zarr.json")
+    if doc is None:
+        raise InputError(str(path), f"cannot open as a scene TOML or a cracklab Zarr store: its zarr.json is {why}")
+    attrs = doc.get("attributes") or {}
+    if "scene" not in attrs:
+        raise InputError(str(path), "is a Zarr store but not a cracklab run (no 'scene' attribute)")
+    fmt = attrs.get("cracklab_run_format", checkpoint.RUN_FORMAT)
+    if not isinstance(fmt, int) or fmt > checkpoint.RUN_FORMAT:
+        raise InputError(str(path), f"was written by cracklab {attrs.get('cracklab_version', '?')} in store format "
+                                    f"{fmt!r}; this cracklab reads formats up to {checkpoint.RUN_FORMAT}")
+    data = read_scene_json(attrs["scene"])
+    names = sorted(e.name for e in os.scandir(p) if e.is_dir() and e.name.startswith("input_"))
+    arrays = stored_inputs(p, names)
+    if arrays is None:
+        raise StoreError(p, "its scene's input arrays cannot be read (cracklab verify names the damaged files); "
+                            "give the scene file (SCENE.toml) instead")
+    digest = attrs.get("cracklab_scene_digest")
+    if isinstance(digest, str) and checkpoint.scene_digest(attrs["scene"], arrays) != digest:
+        raise StoreError(p, "its scene does not match the digest cracklab_scene_digest written with the run (changed "
+                            "after the run); give the scene file: cracklab run SCENE.toml -o STORE --resume")
+    return scene_from_data(data, arrays)
+
+
 def scene_of(result):
     """The scene that produced ``result`` (from its attrs and input variables)."""
     from ..model.scene_io import read_scene_json

@@ -35,6 +35,7 @@ from ..errors import StoreWarning
 from .checkpoint import is_final_array, scene_digest
 
 CHECKSUM_CODEC = "crc32c"
+SCENE_CHANGED = "the run's scene"      # how a scene that is not the run's own is named
 CHECKPOINT_GROUP = "_checkpoint"
 MEMBERS = "members"
 ENDED = ("complete", "failed")
@@ -90,6 +91,9 @@ class Report:
                         "and rewrites the member table and the consolidated metadata")
             return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the damaged members "
                     "(--no-resume recomputes every member)")
+        if any(d.what.startswith(SCENE_CHANGED) for d in self.damage):
+            return ("run it again from its scene file with --resume, which recomputes a damaged store: cracklab run "
+                    "SCENE.toml -o STORE --resume (not the store itself: its scene was changed)")
         return ("run it again with --resume, which recomputes a damaged store: cracklab run SCENE.toml -o STORE "
                 "--resume (SCENE may be the store itself while its scene inputs are intact)")
 
@@ -331,7 +335,7 @@ def check_consolidated(p: Path, doc: dict, report: Report, remedy: str, member=N
 FLOAT_ARRAYS = ("t", "x1", "x3", "t_station", "station_x1", "station_x3", "rupture_time")
 
 
-def _inputs(p: Path, names) -> dict | None:
+def stored_inputs(p: Path, names) -> dict | None:
     """The scene input arrays stored in ``p`` (None when one cannot be read: named elsewhere)."""
     import zarr
 
@@ -384,14 +388,14 @@ def _check_scene(p: Path, attrs: dict, inputs, names, status, report: Report, me
     """What the run's ``scene`` attribute says against what is stored: the scene (attr and
     input arrays) against the digest written with the run, then the shape, data type and
     units of every array against those the scene gives."""
-    arrays = _inputs(p, inputs)
+    arrays = stored_inputs(p, inputs)
     if arrays is None:
         return
     digest = attrs.get("cracklab_scene_digest")
     if isinstance(digest, str) and scene_digest(attrs["scene"], arrays) != digest:
-        add(report, Damage(str(p / "zarr.json"), "the run's scene (its 'scene' attribute and input arrays) does not "
-                                                 "match the digest cracklab_scene_digest written with the run: "
-                                                 "changed after the run", member, remedy))
+        add(report, Damage(str(p / "zarr.json"), f"{SCENE_CHANGED} (its 'scene' attribute and input arrays) does not "
+                                                 f"match the digest cracklab_scene_digest written with the run: "
+                                                 f"changed after the run", member, remedy))
         return
     try:
         from ..model.scene_io import read_scene_json, scene_from_data

@@ -105,6 +105,7 @@ def test_a_changed_scene_attribute_is_named_never_exported_and_recomputed(store,
     assert code == 1, out
     assert (f"  DAMAGED {meta}: the run's scene (its 'scene' attribute and input arrays) does not match the digest "
             f"cracklab_scene_digest written with the run: changed after the run{_remedy(store)}") in out.splitlines()
+    assert "  what to do: run it again from its scene file with --resume" in out and "not the store itself" in out
     _refused_by_export(store, meta, tmp_path)          # once: wrote nu = 0.3 next to the data of nu = 0.25
     # once: "holds this run, complete (checked); nothing to do"
     _repaired(store, sound, f"{meta}: the run's scene (its 'scene' attribute and input arrays) does not match")
@@ -180,3 +181,26 @@ def test_the_consolidated_metadata_describes_no_removed_checkpoint(tmp_path, mon
     cracklab.simulate(_scene(), store=killed, resume=True)
     assert not (killed / ck.GROUP).exists() and list(xr.open_datatree(killed, engine="zarr").children) == []
     assert V.verify(killed).ok
+
+
+def test_the_store_as_its_own_scene_file(store, sound):
+    """``cracklab run STORE -o STORE --resume`` takes the scene from the store's attrs and
+    input arrays, past an array changed by hand (once: "cannot open ... conflicting sizes
+    for dimension 't'"), and refuses a scene that is not the one the run recorded."""
+    meta = store / "delta_2" / "zarr.json"
+    _edit(meta, lambda doc: doc.update(shape=[doc["shape"][0] + 3, *doc["shape"][1:]]))
+    code, out = _cli("run", store, "-o", store, "--resume", "--no-progress")
+    assert code == 0 and f"{meta}: array delta_2 has shape (20, 32, 32)" in out, out
+    assert V.verify(store).ok
+
+    def nu(doc):
+        scene = json.loads(doc["attributes"]["scene"])
+        scene["material"]["nu"] = 0.3
+        doc["attributes"]["scene"] = json.dumps(scene)
+
+    _edit(store / "zarr.json", nu)
+    code, out = _cli("run", store, "-o", store, "--resume", "--no-progress")
+    assert code == 1 and out.strip().splitlines() == [
+        f"Error: store {store}: its scene does not match the digest cracklab_scene_digest written with the run "
+        f"(changed after the run); give the scene file: cracklab run SCENE.toml -o STORE --resume"], out
+    _repaired(store, sound, "does not match the digest")
