@@ -28,13 +28,24 @@ def _base_key(store: str, params: dict):
     store does not record it (a study over a scene file)."""
     if "builder" in params:
         return "builder"
-    doc, _ = V.read_json(Path(store) / "zarr.json")
+    root = Path(store) / "zarr.json"
     try:
-        base = json.loads((doc or {}).get("attributes", {}).get("study", "{}")).get("base")
-    except (ValueError, AttributeError, TypeError):
+        stamp = (str(root), root.stat().st_mtime_ns, root.stat().st_size)
+    except OSError:
         return None
-    digest = base.get("scene_digest") if isinstance(base, dict) else None
-    return f"scene:{digest}" if isinstance(digest, str) else None
+    if stamp not in _BASES:            # the root's zarr.json (with the consolidated metadata) read once
+        doc, _ = V.read_json(root)
+        try:
+            base = json.loads((doc or {}).get("attributes", {}).get("study", "{}")).get("base")
+        except (ValueError, AttributeError, TypeError):
+            base = None
+        digest = base.get("scene_digest") if isinstance(base, dict) else None
+        _BASES.clear()
+        _BASES[stamp] = f"scene:{digest}" if isinstance(digest, str) else None
+    return _BASES[stamp]
+
+
+_BASES: dict = {}      # {(root zarr.json, mtime, size): base key} of the last store asked
 
 
 def _same(given, stored) -> bool:

@@ -11,10 +11,16 @@ store (what ``cracklab.simulate(scene, store=...)`` writes) it checks that
   value (NaN); cracklab writes every chunk of the written extent, NaN-only ones included;
 * every present chunk reads: decompression and, for arrays written with a ``crc32c``
   codec (every array of this cracklab), its checksum. Arrays without one (written by an
-  older cracklab) are noted: a flipped byte there can go unnoticed.
+  older cracklab) are noted: a flipped byte there can go unnoticed;
+* the metadata readers see matches what is stored: the consolidated metadata (what plain
+  xarray reads) lists the groups and arrays present with their own metadata; the scene
+  (attr and input arrays) matches ``cracklab_scene_digest``; every array's shape, data
+  type and units are those the scene gives. Each mismatch names its remedy.
 
 An ensemble store is checked member by member (the complete ones; the others are rerun
-by the next sweep anyway). ``check_run``/``check_ensemble`` return a ``Report``; reading
+by the next sweep anyway), and its root's consolidated metadata against the members
+present; a member's parameters and the member table are checked by
+``cracklab.ensemble.verify``, which ``cracklab verify`` runs. ``check_run``/``check_ensemble`` return a ``Report``; reading
 every chunk costs about as much as loading the store once (``read=False`` checks the
 metadata and the chunk listing only).
 """
