@@ -12,7 +12,7 @@ from .common import main
 @click.argument("store", type=click.Path(exists=True, file_okay=False))
 @click.option("--quick", is_flag=True,
               help="Check the metadata and that every chunk is present, without reading the data "
-                   "(no checksums).")
+                   "(no checksums; only the scene's input arrays are read, for its digest).")
 def verify(store, quick) -> None:
     """Check every array of a run or an ensemble STORE: metadata, the arrays a run holds,
     every chunk present and (unless --quick) read with its checksum, and the metadata
