@@ -12,6 +12,9 @@ from ..output import verify as V
 from .identity import decode, member_id
 from .planning import TOP_LEVEL
 
+_BASES: dict = {}      # {(root zarr.json, mtime, size): base key} of the last store asked
+
+
 def put(report, damage) -> None:
     """Add ``damage``; it replaces a line about the same file found from the consolidated
     metadata (this one says what is wrong), and is dropped when the file is named already."""
@@ -43,9 +46,6 @@ def _base_key(store: str, params: dict):
         _BASES.clear()
         _BASES[stamp] = f"scene:{digest}" if isinstance(digest, str) else None
     return _BASES[stamp]
-
-
-_BASES: dict = {}      # {(root zarr.json, mtime, size): base key} of the last store asked
 
 
 def _same(given, stored) -> bool:

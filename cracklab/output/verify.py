@@ -20,9 +20,9 @@ store (what ``cracklab.simulate(scene, store=...)`` writes) it checks that
 An ensemble store is checked member by member (the complete ones; the others are rerun
 by the next sweep anyway), and its root's consolidated metadata against the members
 present; a member's parameters and the member table are checked by
-``cracklab.ensemble.verify``, which ``cracklab verify`` runs. ``check_run``/``check_ensemble`` return a ``Report``; reading
-every chunk costs about as much as loading the store once (``read=False`` checks the
-metadata and the chunk listing only).
+``cracklab.ensemble.verify``, which ``cracklab verify`` runs. ``check_run`` and
+``check_ensemble`` return a ``Report``; reading every chunk costs about as much as
+loading the store once (``read=False`` checks the metadata and the chunk listing only).
 """
 from __future__ import annotations
 
@@ -335,10 +335,6 @@ def check_consolidated(p: Path, doc: dict, report: Report, remedy: str, member=N
         if key not in listed and not (parent in stored and parent not in listed):     # a group: named once
             add(report, Damage(str(p / key / "zarr.json"), f"not in the consolidated metadata of {root}: plain "
                                                            f"xarray does not see it", who(key), remedy))
-
-
-#: arrays cracklab writes as float64 (besides the recorded fields and their station series)
-FLOAT_ARRAYS = ("t", "x1", "x3", "t_station", "station_x1", "station_x3", "rupture_time")
 
 
 def stored_inputs(p: Path, names) -> dict | None:

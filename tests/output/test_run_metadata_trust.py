@@ -145,7 +145,8 @@ def test_consolidated_metadata_out_of_step_is_named_and_rewritten(store, sound):
     assert code == 1, out
     lines = out.splitlines()
     assert (f"  DAMAGED {store / 'delta_2' / 'zarr.json'}: differs from its copy in the consolidated metadata of "
-            f"{root} (attribute units): changed after the store was written; plain xarray reads the copy{_remedy(store)}") in lines
+            f"{root} (attribute units): changed after the store was written; plain xarray reads the copy"
+            f"{_remedy(store)}") in lines
     assert (f"  DAMAGED {store / 'old_field'}: listed in the consolidated metadata of {root} but not in the store: "
             f"plain xarray (xr.open_zarr, xr.open_datatree) reads it as fill values (NaN){_remedy(store)}") in lines
     assert (f"  DAMAGED {store / 'extra' / 'zarr.json'}: not in the consolidated metadata of {root}: plain xarray "
