@@ -181,8 +181,8 @@ def is_complete(store, mid) -> bool:
 def damage_of(store, member: Member):
     """None when the complete member ``member`` is sound (every chunk read and checked, its
     metadata and parameters against what is stored: ``checks.check_member``); else a line
-    naming the damage, after marking the member
-    damaged and incomplete (so that no reader takes it, and the sweep runs it again)."""
+    naming the damage, after marking the member damaged and incomplete (so that no reader
+    takes it, and the sweep runs it again)."""
     if "://" in store:
         return None             # only local stores are verified
     from .checks import check_member
