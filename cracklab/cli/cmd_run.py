@@ -142,7 +142,7 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
 
     try:
         sc = _scene_of(scene, sets, allow)
-    except InputError as exc:
+    except (InputError, StoreError) as exc:
         raise fail(exc) from None
     if dry_run:
         if not _dry_run_scene(sc, scene, output):

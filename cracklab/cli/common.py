@@ -66,9 +66,11 @@ def load_scene(path: str, allow=()):
 
         data = load_toml(path, "a scene: [material], [grid], [law], [loading], t_end")
         return scene_from_data(data, base=Path(path).absolute().parent, allow=allow)  # references relative to it
-    import xarray as xr
+    from ..output.simulate import scene_of, scene_of_store
 
-    from ..output.simulate import scene_of
+    if os.path.exists(os.path.join(path, "zarr.json")):     # Zarr v3: read past arrays changed by hand
+        return scene_of_store(path)
+    import xarray as xr
 
     try:
         ds = xr.open_zarr(path, consolidated=False)
@@ -76,12 +78,6 @@ def load_scene(path: str, allow=()):
         raise InputError(path, f"cannot open as a scene TOML or a cracklab Zarr store: {exc}") from None
     if "scene" not in ds.attrs:
         raise InputError(path, "is a Zarr store but not a cracklab run (no 'scene' attribute)")
-    from ..output.checkpoint import RUN_FORMAT
-
-    fmt = ds.attrs.get("cracklab_run_format", RUN_FORMAT)
-    if not isinstance(fmt, int) or fmt > RUN_FORMAT:
-        raise InputError(path, f"was written by cracklab {ds.attrs.get('cracklab_version', '?')} in store "
-                               f"format {fmt!r}; this cracklab reads formats up to {RUN_FORMAT}")
     return scene_of(ds)
 
 

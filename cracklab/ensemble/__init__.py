@@ -37,7 +37,10 @@ Modules: ``spec`` (Builder, Sweep, Study, Member, SweepResult), ``identity`` (ca
 values, member ids, digests), ``planning`` (the members
 of a sweep, one member's scene), ``store`` (paths, checks, member records, atomic
 replacement), ``lock`` (the store lock), ``running`` (dask, ``run``, the worker task),
-``study`` (STUDY.toml), ``read`` (member_status, open_member, open_ensemble, member_scene);
+``study`` (STUDY.toml), ``read`` (member_status, open_member, open_ensemble, member_scene),
+``members_table`` (the member table at the root: written, and checked against the
+members), ``checks`` (a member's parameters against its id and scene), ``verify`` (what
+``cracklab verify`` checks of a store);
 the builder registry is ``cracklab.scenes.registry``;
 ``summary`` (the table of parameters and measures per member) is computed by
 ``cracklab.analysis``;

@@ -1,11 +1,20 @@
-"""The member table at the root of an ensemble's store (``write_member_table``)."""
+"""The member table at the root of an ensemble's store: ``write_member_table`` at the end
+of every sweep, ``check_table`` against the member groups (``cracklab verify``)."""
 from __future__ import annotations
 
+import math
 import warnings
+from pathlib import Path
 
+import numpy as np
+
+from ..errors import InputError, StoreError
+from ..output import verify as V
 from ..output.checkpoint import encoding
+from .checks import put
+from .lock import LOCK_NAME
 from .read import member_coords, member_status
-from .store import MEMBERS, consolidate, open_group
+from .store import MEMBERS, consolidate, error_line, open_group, store_str
 
 
 def write_member_table(store: str):
@@ -35,3 +44,68 @@ def write_member_table(store: str):
         else:
             open_group(store, "a", consolidated=False).attrs.put(attrs)
         consolidate(store)
+
+
+def _values(da) -> list:
+    vals = np.asarray(da.values)
+    return [None if isinstance(v, float) and math.isnan(v) else v for v in vals.tolist()]
+
+
+def check_table(store, report) -> None:
+    """Add the damage of the member table at the root of ``store`` (what
+    ``xr.open_zarr(STORE)`` shows) that does not say what the member groups say: other
+    members, or another status or parameter of a member. Not while a sweep holds the
+    store (it rewrites the table when it ends)."""
+    import xarray as xr
+
+    store = store_str(store)
+    p = Path(store)
+    doc, _ = V.read_json(p / "zarr.json")
+    if doc is None or "coordinates" not in (doc.get("attributes") or {}):
+        return                              # no table yet (a first sweep killed): nothing to compare
+    if (p / LOCK_NAME).exists():
+        report.notes.append("a sweep holds the store (or was killed): the member table at its root is rewritten "
+                            "when a sweep ends")
+        return
+    try:
+        status = member_status(store)
+    except (InputError, StoreError):
+        return                              # named by the store's checks
+    want = member_coords(status) if status else {}
+    remedy = V.store_remedy(store)
+    names = str(doc["attributes"]["coordinates"]).split()
+
+    def damage(name, what):
+        put(report, V.Damage(str(p / name), f"the member table {what}: that is what plain xarray "
+                                             f"(xr.open_zarr) shows", None, remedy))
+
+    try:
+        table = xr.open_zarr(store, consolidated=False)
+        listed = _values(table["member"]) if "member" in table.coords else []
+    except Exception as exc:  # noqa: BLE001 - damaged arrays of the table
+        return damage("member", f"cannot be read ({error_line(exc)})")
+    ids = [s["id"] for s in status]
+    if listed != ids:
+        gone = [m for m in listed if m not in ids]
+        new = [m for m in ids if m not in listed]
+        what = (f"lists {len(gone)} member(s) not in the store ({', '.join(gone[:3])})" if gone else
+                f"lacks {len(new)} member(s) of the store ({', '.join(new[:3])})" if new else
+                "lists the members in another order than the store")
+        damage("member", what)
+    row = {m: i for i, m in enumerate(listed)}
+    damaged = set(report.damaged_members())     # their groups are not to be believed
+    for name, (_, values, _) in want.items():
+        if name == "member":
+            continue
+        if name not in table.coords:
+            damage(name, f"has no coordinate {name}")
+            continue
+        stored = _values(table[name])
+        expected = [None if isinstance(v, float) and math.isnan(v) else v for v in np.asarray(values).tolist()]
+        for mid, value in zip(ids, expected):
+            if mid in row and mid not in damaged and stored[row[mid]] != value:
+                damage(name, f"gives {name} = {stored[row[mid]]!r} for member {mid}, but its group gives {value!r}")
+                break
+    for name in names:
+        if name not in want:
+            damage(name, f"has a coordinate {name} that no member's parameters give")

@@ -188,7 +188,7 @@ def _read_error(store, exc) -> StoreError:
     from .store import error_line
 
     if "://" not in store:
-        from ..output.verify import verify
+        from .verify import verify
 
         with contextlib.suppress(Exception):
             report = verify(store)

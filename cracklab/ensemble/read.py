@@ -61,10 +61,11 @@ UNREADABLE = "the member's metadata cannot be read"
 
 def _member_damage(store, mid):
     """None, or a StoreError for the complete member ``mid`` whose metadata or chunk
-    listing is damaged (cheap: no data is read; a changed byte raises when read)."""
+    listing is damaged, or whose metadata does not match what is stored (cheap: no data is
+    read but the scene's inputs; a changed byte raises when read)."""
     if "://" in store:
         return None
-    from ..output.verify import check_member
+    from .checks import check_member
 
     report = check_member(store, mid, read=False)
     if report.ok:

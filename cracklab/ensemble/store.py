@@ -179,12 +179,13 @@ def is_complete(store, mid) -> bool:
 
 
 def damage_of(store, member: Member):
-    """None when the complete member ``member`` is sound (every chunk read and checked,
-    ``cracklab.output.verify``); else a line naming the damage, after marking the member
-    damaged and incomplete (so that no reader takes it, and the sweep runs it again)."""
+    """None when the complete member ``member`` is sound (every chunk read and checked, its
+    metadata and parameters against what is stored: ``checks.check_member``); else a line
+    naming the damage, after marking the member damaged and incomplete (so that no reader
+    takes it, and the sweep runs it again)."""
     if "://" in store:
         return None             # only local stores are verified
-    from ..output.verify import check_member
+    from .checks import check_member
 
     report = check_member(store, member.id)
     if report.ok:

@@ -363,10 +363,10 @@ class SequenceRecorder:
 
         self._mark("complete", {**final.attrs,
                                 **({} if resumed_from is None else {"cracklab_resumed_from": int(resumed_from)})})
+        checkpoint.remove(self.path)       # before the consolidated metadata: of what is there
         with warnings.catch_warnings():     # zarr: consolidated metadata is not in the v3 spec yet
             warnings.simplefilter("ignore")
             zarr.consolidate_metadata(str(self.path))
-        checkpoint.remove(self.path)
         return xr.open_zarr(str(self.path))
 
 

@@ -255,11 +255,12 @@ class Recorder:
             # last: a kill or a full disk before this leaves a store that is not complete
             self._store_op("marking the store complete" if not error else "marking the store failed",
                            group.attrs.put, final)
-            # then its consolidated metadata, where xarray.open_zarr looks first (no warning)
-            self._store_op("consolidating the store's metadata", _consolidate,
-                           str(self.path) if self.path is not None else self.store)
             if self.path is not None:
                 checkpoint.remove(self.path)
+            # then its consolidated metadata, where xarray.open_zarr looks first (no warning):
+            # of what is there, the checkpoint gone
+            self._store_op("consolidating the store's metadata", _consolidate,
+                           str(self.path) if self.path is not None else self.store)
             return xr.open_zarr(self.store, consolidated=False)
         for name, arr in self.inputs.items():
             extra[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(scene, name))
@@ -278,6 +279,14 @@ def _consolidate(store):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         zarr.consolidate_metadata(store)
+
+
+def _consolidated(path) -> bool:
+    """Whether the run store at ``path`` has consolidated metadata."""
+    from .verify import read_json
+
+    doc, _ = read_json(path / "zarr.json")
+    return isinstance((doc or {}).get("consolidated_metadata"), dict)
 
 
 @contextlib.contextmanager
@@ -368,8 +377,9 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
             if attrs.get("cracklab_status") == "complete":
                 report = verify.check_run(path)
                 if report.ok:
-                    if ck is not None:          # killed after the status, before the clean-up
-                        checkpoint.remove(path)
+                    if ck is not None or not _consolidated(path):   # killed after the status, before the
+                        checkpoint.remove(path)                      # clean-up and the consolidated metadata
+                        _consolidate(str(path))
                     return xr.open_zarr(store, consolidated=False)
                 verify.warn_damaged(path, report, "the run is done again from the start")
                 ck = None
@@ -449,6 +459,41 @@ def stations(result) -> xr.Dataset:
     ds = ds.rename({"t_station": "t"})
     return ds.set_coords([c for c in ("station_x1", "station_x3") if c in ds]).rename(
         {"station_x1": "x1", "station_x3": "x3"})
+
+
+def scene_of_store(path):
+    """The scene of the run store at ``path`` (a local directory) from its attrs and input
+    arrays alone, read past the rest of the store (an array whose metadata was changed
+    by hand, which xarray refuses to open); refused when it is not the scene the run
+    recorded (attr ``cracklab_scene_digest``)."""
+    import os
+    from pathlib import Path
+
+    from ..model.scene_io import read_scene_json
+    from .verify import read_json, stored_inputs
+
+    p = Path(path)
+    doc, why = read_json(p / "zarr.json")
+    if doc is None:
+        raise InputError(str(path), f"cannot open as a scene TOML or a cracklab Zarr store: its zarr.json is {why}")
+    attrs = doc.get("attributes") or {}
+    if "scene" not in attrs:
+        raise InputError(str(path), "is a Zarr store but not a cracklab run (no 'scene' attribute)")
+    fmt = attrs.get("cracklab_run_format", checkpoint.RUN_FORMAT)
+    if not isinstance(fmt, int) or fmt > checkpoint.RUN_FORMAT:
+        raise InputError(str(path), f"was written by cracklab {attrs.get('cracklab_version', '?')} in store format "
+                                    f"{fmt!r}; this cracklab reads formats up to {checkpoint.RUN_FORMAT}")
+    data = read_scene_json(attrs["scene"])
+    names = sorted(e.name for e in os.scandir(p) if e.is_dir() and e.name.startswith("input_"))
+    arrays = stored_inputs(p, names)
+    if arrays is None:
+        raise StoreError(p, "its scene's input arrays cannot be read (cracklab verify names the damaged files); "
+                            "give the scene file (SCENE.toml) instead")
+    digest = attrs.get("cracklab_scene_digest")
+    if isinstance(digest, str) and checkpoint.scene_digest(attrs["scene"], arrays) != digest:
+        raise StoreError(p, "its scene does not match the digest cracklab_scene_digest written with the run (changed "
+                            "after the run); give the scene file: cracklab run SCENE.toml -o STORE --resume")
+    return scene_from_data(data, arrays)
 
 
 def scene_of(result):

@@ -11,15 +11,22 @@ store (what ``cracklab.simulate(scene, store=...)`` writes) it checks that
   value (NaN); cracklab writes every chunk of the written extent, NaN-only ones included;
 * every present chunk reads: decompression and, for arrays written with a ``crc32c``
   codec (every array of this cracklab), its checksum. Arrays without one (written by an
-  older cracklab) are noted: a flipped byte there can go unnoticed.
+  older cracklab) are noted: a flipped byte there can go unnoticed;
+* the metadata readers see matches what is stored: the consolidated metadata (what plain
+  xarray reads) lists the groups and arrays present with their own metadata; the scene
+  (attr and input arrays) matches ``cracklab_scene_digest``; every array's shape, data
+  type and units are those the scene gives. Each mismatch names its remedy.
 
 An ensemble store is checked member by member (the complete ones; the others are rerun
-by the next sweep anyway). ``check_run``/``check_ensemble`` return a ``Report``; reading
-every chunk costs about as much as loading the store once (``read=False`` checks the
-metadata and the chunk listing only).
+by the next sweep anyway), and its root's consolidated metadata against the members
+present; a member's parameters and the member table are checked by
+``cracklab.ensemble.verify``, which ``cracklab verify`` runs. ``check_run`` and
+``check_ensemble`` return a ``Report``; reading every chunk costs about as much as
+loading the store once (``read=False`` checks the metadata and the chunk listing only).
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -28,10 +35,13 @@ from dataclasses import dataclass, field
 from itertools import product
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import StoreWarning
-from .checkpoint import is_final_array
+from .checkpoint import is_final_array, scene_digest
 
 CHECKSUM_CODEC = "crc32c"
+SCENE_CHANGED = "the run's scene"      # how a scene that is not the run's own is named
 CHECKPOINT_GROUP = "_checkpoint"
 MEMBERS = "members"
 ENDED = ("complete", "failed")
@@ -50,6 +60,7 @@ class Damage:
     path: str                 # the damaged (or missing) file or directory
     what: str                 # what is wrong with it
     member: str | None = None
+    remedy: str | None = None  # what repairs it (a metadata mismatch), shown in its line
 
     def __str__(self):
         return f"{self.path}: {self.what}"
@@ -78,11 +89,17 @@ class Report:
         if self.ok:
             return ""
         if self.kind == "ensemble":
-            if any(d.member is None for d in self.damage):
+            if any(d.member is None and d.remedy is None for d in self.damage):
                 return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE) to repair the store's groups; "
                         "if the root zarr.json is damaged, restore it or delete the store and run the sweep again")
+            if any(d.member is None for d in self.damage):
+                return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it runs the damaged and missing members "
+                        "and rewrites the member table and the consolidated metadata")
             return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the damaged members "
                     "(--no-resume recomputes every member)")
+        if any(d.what.startswith(SCENE_CHANGED) for d in self.damage):
+            return ("run it again from its scene file with --resume, which recomputes a damaged store: cracklab run "
+                    "SCENE.toml -o STORE --resume (not the store itself: its scene was changed)")
         return ("run it again with --resume, which recomputes a damaged store: cracklab run SCENE.toml -o STORE "
                 "--resume (SCENE may be the store itself while its scene inputs are intact)")
 
@@ -103,7 +120,7 @@ class Report:
         out = [f"{self.store}: {self.summary()}"]
         for d in self.damage:
             who = f"member {d.member}: " if d.member else ""
-            out.append(f"  DAMAGED {who}{d}")
+            out.append(f"  DAMAGED {who}{d}" + (f"; remedy: {d.remedy}" if d.remedy else ""))
         if self.unchecksummed:
             n = len(self.unchecksummed)
             out.append(f"  note: no checksums in {n} array{'s' if n != 1 else ''} (e.g. {self.unchecksummed[0]}): "
@@ -231,6 +248,196 @@ def _why(exc) -> str:
     return text
 
 
+# ---------------------------------------------------------------------------- what readers see
+def run_remedy(store) -> str:
+    """What repairs a run store whose metadata no longer matches its data."""
+    return f"cracklab run SCENE.toml -o {store} --resume recomputes the run"
+
+
+def member_remedy(store) -> str:
+    """What repairs an ensemble member whose metadata no longer matches its data."""
+    return f"cracklab sweep STUDY.toml -o {store} recomputes the member"
+
+
+def store_remedy(store) -> str:
+    """What repairs the root of an ensemble store (its member table, its consolidated metadata)."""
+    return (f"cracklab sweep STUDY.toml -o {store} runs the members that are not there and rewrites the member "
+            f"table and the consolidated metadata")
+
+
+def add(report: Report, damage: Damage) -> None:
+    """Add ``damage`` unless its file is named already (one line per file)."""
+    if not any(d.path == damage.path for d in report.damage):
+        report.damage.append(damage)
+
+
+def _nodes(p: Path, prefix: str = "") -> dict:
+    """{path below ``p``: its zarr.json document, None when unreadable} of the groups and
+    arrays stored below the group at ``p`` (hidden entries and checkpoints left out)."""
+    out = {}
+    for name in _subdirs(p):
+        if name == CHECKPOINT_GROUP or not (p / name / "zarr.json").exists():
+            continue
+        doc, _ = read_json(p / name / "zarr.json")
+        out[prefix + name] = doc
+        if doc is not None and doc.get("node_type") == "group":
+            out.update(_nodes(p / name, f"{prefix}{name}/"))
+    return out
+
+
+def _differences(own: dict, copy) -> list[str]:
+    """The keys (``attribute scene`` for an attribute) in which a node's own metadata and
+    its consolidated copy differ."""
+    if not isinstance(copy, dict):
+        return ["all"]
+    out = []
+    for key in sorted(set(own) | set(copy)):
+        if key == "consolidated_metadata" or own.get(key) == copy.get(key):
+            continue
+        a, b = own.get(key), copy.get(key)
+        if key == "attributes" and isinstance(a, dict) and isinstance(b, dict):
+            out += [f"attribute {k}" for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
+        else:
+            out.append(key)
+    return out
+
+
+def check_consolidated(p: Path, doc: dict, report: Report, remedy: str, member=None) -> None:
+    """The consolidated metadata in ``doc`` (the zarr.json of the group at ``p``), which plain
+    xarray reads instead of each node's own, against the groups and arrays stored: every
+    node it lists is there with the same metadata, and every node there is listed.
+    ``member``: the member id a node's damage is reported under (a function of its path)."""
+    cm = doc.get("consolidated_metadata")
+    listed = cm.get("metadata") if isinstance(cm, dict) else None
+    if not isinstance(listed, dict):
+        return
+    who = member if callable(member) else (lambda key: member)
+    root = p / "zarr.json"
+    stored = _nodes(p)
+    for key, copy in listed.items():
+        parts = key.split("/")
+        if CHECKPOINT_GROUP in parts or any(x.startswith(".") for x in parts):
+            continue
+        if key not in stored:
+            parent = key.rpartition("/")[0]
+            if (p / key).exists() or (parent in listed and not (p / parent).exists()):
+                continue        # its metadata is damaged (named by the array checks), or its group is gone
+            add(report, Damage(str(p / key), f"listed in the consolidated metadata of {root} but not in the store: "
+                                             f"plain xarray (xr.open_zarr, xr.open_datatree) reads it as fill "
+                                             f"values (NaN)", who(key), remedy))
+        elif stored[key] is not None and (diff := _differences(stored[key], copy)):
+            add(report, Damage(str(p / key / "zarr.json"), f"differs from its copy in the consolidated metadata of "
+                                                           f"{root} ({', '.join(diff)}): changed after the store "
+                                                           f"was written; plain xarray reads the copy",
+                               who(key), remedy))
+    for key in stored:
+        parent = key.rpartition("/")[0]
+        if key not in listed and not (parent in stored and parent not in listed):     # a group: named once
+            add(report, Damage(str(p / key / "zarr.json"), f"not in the consolidated metadata of {root}: plain "
+                                                           f"xarray does not see it", who(key), remedy))
+
+
+def stored_inputs(p: Path, names) -> dict | None:
+    """The scene input arrays stored in ``p`` (None when one cannot be read: named elsewhere)."""
+    import zarr
+
+    out = {}
+    for name in names:
+        try:
+            out[name] = np.asarray(zarr.open_array(store=str(p / name), mode="r")[...])
+        except Exception:  # noqa: BLE001 - missing or damaged: the array checks name it
+            return None
+    return out
+
+
+def _expected(scene, names) -> tuple[dict, dict, set]:
+    """({dimension: size}, {array: units}, arrays written as float64) of the run of
+    ``scene`` (dimension sizes of t and t_station are upper bounds for a failed run)."""
+    from .attrs import field_attrs, input_attrs
+
+    grid, record, u = scene.grid, scene.record, scene.units
+    s1, s3 = record.region_slices(grid)
+    sizes = {"x1": len(grid.x1[s1]), "x3": len(grid.x3[s3])}
+    if scene.sequence is None:
+        sizes["t"] = int(np.asarray(record.snapshot_steps(scene.nsteps, scene.dt)).size) if record.fields else 0
+        if record.stations:
+            sizes["station"] = len(record.station_nodes(grid))
+            sizes["t_station"] = scene.nsteps + 1
+    units, floats = {}, set()
+    for name in names:
+        field = name[len("station_"):] if name.startswith("station_") else name
+        if name in ("t", "t_station", "rupture_time"):
+            units[name] = u["time"]
+        elif name in ("x1", "x3", "station_x1", "station_x3"):
+            units[name] = u["length"]
+        elif name.startswith("input_"):
+            with contextlib.suppress(Exception):
+                units[name] = input_attrs(scene, name)["units"]
+            continue
+        elif field in record.fields or (name.startswith("station_") and field.split("_")[0] in
+                                         ("delta", "v", "tau", "strength")):
+            try:
+                units[name] = field_attrs(scene, field)["units"]
+            except (KeyError, ValueError, AttributeError):
+                continue
+        else:
+            continue
+        floats.add(name)
+    return sizes, units, floats
+
+
+def _check_scene(p: Path, attrs: dict, inputs, names, status, report: Report, member, remedy) -> None:
+    """What the run's ``scene`` attribute says against what is stored: the scene (attr and
+    input arrays) against the digest written with the run, then the shape, data type and
+    units of every array against those the scene gives."""
+    arrays = stored_inputs(p, inputs)
+    if arrays is None:
+        return
+    digest = attrs.get("cracklab_scene_digest")
+    if isinstance(digest, str) and scene_digest(attrs["scene"], arrays) != digest:
+        add(report, Damage(str(p / "zarr.json"), f"{SCENE_CHANGED} (its 'scene' attribute and input arrays) does not "
+                                                 f"match the digest cracklab_scene_digest written with the run: "
+                                                 f"changed after the run", member, remedy))
+        return
+    try:
+        from ..model.scene_io import read_scene_json, scene_from_data
+
+        scene = scene_from_data(read_scene_json(attrs["scene"]), arrays)
+        sizes, units, floats = _expected(scene, names)
+    except Exception:  # noqa: BLE001 - a scene this cracklab cannot build: its digest is what is checked
+        return
+    docs = {name: read_json(p / name / "zarr.json")[0] for name in names}
+    docs = {k: v for k, v in docs.items() if v is not None and v.get("node_type", "array") == "array"}
+    coords = {k: v["shape"][0] for k, v in docs.items()
+              if v.get("dimension_names") == [k] and isinstance(v.get("shape"), list) and len(v["shape"]) == 1}
+    at_most = status == "failed"
+    for name, doc in docs.items():
+        meta = str(p / name / "zarr.json")
+        shape, dims = doc.get("shape"), doc.get("dimension_names")
+        if isinstance(shape, list) and isinstance(dims, list) and len(shape) == len(dims):
+            for n, dim in zip(shape, dims):
+                want = sizes.get(dim)
+                if want is not None and (n > want if at_most and dim in ("t", "t_station") else n != want):
+                    add(report, Damage(meta, f"array {name} has shape {tuple(shape)} along {tuple(dims)}, but the "
+                                             f"run's scene gives {dim} = {'at most ' if at_most else ''}{want}: its "
+                                             f"metadata was changed after the run", member, remedy))
+                    break
+                if status in ENDED and dim in coords and n != coords[dim]:
+                    add(report, Damage(meta, f"array {name} has shape {tuple(shape)} along {tuple(dims)}, but its "
+                                             f"coordinate {dim} has {coords[dim]} values: its metadata was changed "
+                                             f"after the run", member, remedy))
+                    break
+        if name in floats and doc.get("data_type") != "float64":
+            add(report, Damage(meta, f"array {name} has data type {doc.get('data_type')!r}, but cracklab writes it as "
+                                     f"float64 (its chunks hold float64): its metadata was changed after the run",
+                               member, remedy))
+        if name in units:
+            got = (doc.get("attributes") or {}).get("units")
+            if got != units[name]:
+                add(report, Damage(meta, f"variable {name} has units {got!r}, but the run's scene gives "
+                                         f"{units[name]!r}: its metadata was changed after the run", member, remedy))
+
+
 # ---------------------------------------------------------------------------- a run
 def check_run(path, *, read: bool = True, snapshots: int | None = None, final: bool | None = None,
               member: str | None = None, report: Report | None = None) -> Report:
@@ -276,6 +483,11 @@ def check_run(path, *, read: bool = True, snapshots: int | None = None, final: b
             rep.damage.append(Damage(str(adir / "zarr.json"), f"array {name}: metadata missing", member))
             continue
         _check_array(adir, name, read=read, t_extent=None if ended else snapshots, report=rep, member=member)
+    remedy = member_remedy(p.parent.parent) if member else run_remedy(p)
+    if expect is not None:
+        checked = [n for n in present if n != CHECKPOINT_GROUP and (ended or not is_final_array(n))]
+        _check_scene(p, attrs, inputs, checked, status if ended else "running", rep, member, remedy)
+    check_consolidated(p, doc, rep, remedy, member)
     if report is None:
         if status == "running":
             step = attrs.get("cracklab_checkpoint_step")
@@ -326,6 +538,15 @@ def check_ensemble(store, *, read: bool = True) -> Report:
         n = len(rep.damage)
         check_run(p / MEMBERS / mid, read=read, final=True, member=mid, report=rep)
         rep.members[mid] = "sound" if len(rep.damage) == n else "damaged"
+    members_of = {f"{MEMBERS}/{m}": m for m in present}
+
+    def owner(key):
+        return members_of.get("/".join(key.split("/")[:2]))
+
+    check_consolidated(p, doc, rep, store_remedy(p), owner)
+    for d in rep.damage:
+        if rep.members.get(d.member) == "sound":
+            rep.members[d.member] = "damaged"
     statuses = [v for v in rep.members.values() if v not in ("sound", "damaged")]
     for s in sorted(set(statuses)):
         rep.notes.append(f"{statuses.count(s)} member(s) {s}: not complete, the next sweep runs them again")
