@@ -151,7 +151,9 @@ def test_bench_stages_with_the_overlap(monkeypatch):
     assert stages["advance"] < out["worker_ms"]
     assert stages["law"] >= 2e3 * SLEEP and stages["glue"] < 0.5 * 1e3 * SLEEP
     total = sum(stages.values())
-    assert abs(total / out["stages_total_ms"] - 1) < 0.1, (total, out["stages_total_ms"])
+    # medians per stage against the median step: the wait for the worker spreads most on a
+    # loaded host (a sum 15 % under the step was seen with two other jobs running)
+    assert abs(total / out["stages_total_ms"] - 1) < 0.25, (total, out["stages_total_ms"])
 
 
 def test_bench_stage_clock_leaves_nothing_behind():
