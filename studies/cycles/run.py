@@ -1,10 +1,11 @@
-"""SEAS BP1-QD with cracklab (docs/studies/cycles.md): a sequence of earthquakes on an
-antiplane fault in a half space, at two grid spacings.
+"""SEAS BP1-QD and BP1-FD with cracklab (docs/studies/cycles.md): a sequence of earthquakes
+on an antiplane fault in a half space, at two grid spacings, quasi-dynamic and fully dynamic.
 
-    python -m studies.cycles.run [-o OUT] [--dz 50 25] [--years 1500] [--report-only]
+    python -m studies.cycles.run [-o OUT] [--dz 50 25] [--fd 200 100] [--years 1500] [--report-only]
 
-Runs ``cracklab.scenes.bp1`` at each spacing into OUT/bp1_dz<dz>.zarr (a complete store of
-the same scene is reused), with the wall time in OUT/bp1_dz<dz>.json, and writes
+Runs ``cracklab.scenes.bp1`` at each spacing into OUT/bp1_dz<dz>.zarr, and BP1-FD
+(``dynamic=True``) at each ``--fd`` spacing into OUT/bp1fd_dz<dz>.zarr (a complete store of
+the same scene is reused), with the wall time in OUT/bp1[fd]_dz<dz>.json, and writes
 
 * OUT/cycles_results.json       every number of the page,
 * docs/figures/cycles_*.png     slip profiles, largest slip rate against time, stations,
@@ -26,19 +27,20 @@ ROOT = Path(__file__).resolve().parents[2]
 YEAR = 365.0 * 24.0 * 3600.0
 
 
-def store_of(out, dz) -> Path:
-    return Path(out) / f"bp1_dz{dz:g}.zarr"
+def store_of(out, dz, dynamic=False) -> Path:
+    return Path(out) / f"bp1{'fd' if dynamic else ''}_dz{dz:g}.zarr"
 
 
-def run_one(out, dz, years, tolerance, force=False, log=print) -> dict:
+def run_one(out, dz, years, tolerance, force=False, log=print, dynamic=False) -> dict:
     import xarray as xr
 
     from cracklab import simulate
     from cracklab.model.scene_io import scene_to_json
     from cracklab.scenes import bp1
 
-    scene = bp1(dz=dz, years=years, tolerance=tolerance)
-    store, meta_path = store_of(out, dz), store_of(out, dz).with_suffix(".json")
+    scene = bp1(dz=dz, years=years, tolerance=None if dynamic else tolerance, dynamic=dynamic)
+    store = store_of(out, dz, dynamic)
+    meta_path = store.with_suffix(".json")
     text, _ = scene_to_json(scene)
     if not force and store.exists() and meta_path.exists():
         old = xr.open_zarr(store)
@@ -49,7 +51,7 @@ def run_one(out, dz, years, tolerance, force=False, log=print) -> dict:
     t0 = time.time()
     ds = simulate(scene, store=str(store))
     wall = time.time() - t0
-    meta = {"dz": dz, "years": years, "tolerance": tolerance, "wall_s": wall, "nodes": scene.grid.n1,
+    meta = {"dz": dz, "years": years, "tolerance": scene.sequence.tolerance, "wall_s": wall, "nodes": scene.grid.n1,
             **{k: ds.attrs[k] for k in ("accepted_steps", "smallest_step", "largest_step")}}
     meta_path.write_text(json.dumps(meta, indent=1))
     log(f"dz = {dz:g} m: done in {wall:.0f} s, {meta['accepted_steps']} steps", flush=True)
@@ -97,16 +99,16 @@ def earthquakes(t_start, gap=YEAR):
     return [q[0] for q in quakes]
 
 
-def analyse(out, dzs) -> dict:
+def analyse(out, dzs, dynamic=False) -> dict:
     import xarray as xr
 
     from cracklab import analysis
 
     res = {"runs": {}}
     for dz in dzs:
-        ds = xr.open_zarr(store_of(out, dz))
+        ds = xr.open_zarr(store_of(out, dz, dynamic))
         ev = analysis.events(ds).load()
-        meta = json.loads(store_of(out, dz).with_suffix(".json").read_text())
+        meta = json.loads(store_of(out, dz, dynamic).with_suffix(".json").read_text())
         t = ds.t_station.values
         V = ds.max_slip_rate.values
         fast = V >= ds.attrs["event_threshold"]
@@ -144,12 +146,12 @@ def analyse_ensemble(store) -> dict:
     return out
 
 
-def fig_profiles(out, dz, figdir):
+def fig_profiles(out, dz, figdir, dynamic=False):
     import xarray as xr
 
     plt = H.pyplot()
 
-    ds = xr.open_zarr(store_of(out, dz))
+    ds = xr.open_zarr(store_of(out, dz, dynamic))
     shallow = ds.x1.values <= 45e3                  # the frictional fault (40 km) and a little creep
     slip, kind = ds.delta_3.isel(x3=0, x1=shallow).load(), ds.snapshot_kind.values
     z = ds.x1.values[shallow] / 1e3
@@ -158,10 +160,12 @@ def fig_profiles(out, dz, figdir):
         slow = k == "slow" if isinstance(k, str) else k == 0      # snapshot_kind: 0 is the slow cadence
         ax.plot(slip.values[i], z, color="tab:blue" if slow else "tab:red", lw=0.5)
     ax.invert_yaxis()
+    fast = "0.1 s" if dynamic else "second"
     ax.set(xlabel="cumulative slip (m)", ylabel="depth (km)",
-           title=f"BP1-QD, dz = {dz:g} m: slip every 5 years (blue) and every second during events (red)")
+           title=f"BP1-{'FD' if dynamic else 'QD'}, dz = {dz:g} m: slip every 5 years (blue) and every {fast} during "
+                 "events (red)")
     ax.title.set_fontsize(9)
-    return H.save(fig, Path(figdir) / f"cycles_bp1_profiles_dz{dz:g}.png", 110)
+    return H.save(fig, Path(figdir) / f"cycles_bp1{'fd' if dynamic else ''}_profiles_dz{dz:g}.png", 110)
 
 
 #: BICyclE's BP1-QD earthquakes at 7.5 km (years), read off the plot of the SEAS platform's
@@ -209,9 +213,80 @@ def fig_max_rate(out, dzs, figdir):
     return H.save(fig, Path(figdir) / "cycles_bp1_max_slip_rate.png", 110)
 
 
+def fig_qd_fd(out, dz, figdir):
+    """The largest slip rate against time, BP1-QD and BP1-FD at ``dz``: over the run, and over
+    the first earthquake's first minute."""
+    import xarray as xr
+
+    plt = H.pyplot()
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 3.6))
+    for dynamic, colour, label in ((False, "tab:blue", "QD"), (True, "tab:red", "FD")):
+        ds = xr.open_zarr(store_of(out, dz, dynamic))
+        t, V = ds.t_station.values, ds.max_slip_rate.values
+        ax[0].semilogy(t / YEAR, V, color=colour, lw=0.8, label=f"BP1-{label}")
+        first = np.argmax(V > ds.attrs["event_threshold"])
+        near = (t >= t[first] - 10.0) & (t <= t[first] + 60.0)
+        ax[1].plot(t[near] - t[first], V[near], color=colour, lw=0.8, label=f"BP1-{label}")
+    ax[0].set(xlabel="time (years)", ylabel="largest slip rate (m/s)", title=f"dz = {dz:g} m")
+    ax[1].set(xlabel="time from the first event's start (s)", ylabel="largest slip rate (m/s)",
+              title="the first earthquake")
+    for a in ax:
+        a.legend(fontsize=8)
+        a.title.set_fontsize(9)
+    return H.save(fig, Path(figdir) / f"cycles_bp1_qd_fd_dz{dz:g}.png", 110)
+
+
+def events_table(ev) -> list:
+    """The page's table of a run's events (the lists of ``analyse``), and a blank line."""
+    lines = ["| event | start (yr) | duration (s) | hypocentre depth (km) | peak slip rate (m/s) | mean slip (m) | "
+             "moment per length (N/m) |", "|---|---|---|---|---|---|---|"]
+    for i in range(len(ev["t_start"])):
+        lines.append(f"| {i} | {ev['t_start'][i] / YEAR:.3f} | {ev['duration'][i]:.1f} | "
+                     f"{ev['hypocentre_x1'][i] / 1e3:.2f} | {ev['peak_slip_rate'][i]:.3f} | "
+                     f"{ev['mean_slip'][i]:.3f} | {ev['moment'][i]:.4g} |")
+    return lines + [""]
+
+
+def _fd_section(res, dzs_qd):
+    """The page's lines on BP1-FD: cost, events, and QD against FD at the spacings run both ways."""
+    fd = res["fd"]
+    lines = ["## BP1-FD: the fully dynamic response", "",
+             "The same fault with `dynamic=True`: the elastodynamic history of every mode kept exactly at a "
+             "variable step (docs/reference/equations.md, \"Sequences: the dynamic response at a variable step\"), "
+             "a predictor-corrector of order 2 (tolerance 1e-5) whose step never goes below the dynamic step "
+             "beta dz / c_s = 0.5 dz / c_s.", "",
+             "| dz | nodes | years | wall time | accepted steps | smallest step | largest step | steps in events | "
+             "time in events |", "|---|---|---|---|---|---|---|---|---|"]
+    for dz, r in fd.items():
+        lines.append(f"| {dz} m | {r['nodes']} | {r['years']:g} | {r['wall_s']:.0f} s | {r['accepted_steps']} | "
+                     f"{r['smallest_step']:.2g} s | {r['largest_step'] / YEAR:.2g} yr | {r['steps_in_events']} | "
+                     f"{r['time_in_events_s']:.0f} s |")
+    lines += ["", "Wall times on a shared 2-core host (other jobs running), not a benchmark.", ""]
+    for dz, r in fd.items():
+        ev = r["events"]
+        lines += [f"**BP1-FD, dz = {dz} m**: {len(ev['t_start'])} events in {len(r['earthquakes_yr'])} earthquakes "
+                  "starting at (years) " + ", ".join(f"{x:.2f}" for x in r["earthquakes_yr"])
+                  + "; recurrence intervals (years): " + ", ".join(f"{x:.2f}" for x in r["recurrence_yr"]), ""]
+        lines += events_table(ev)
+    both = [dz for dz in fd if float(dz) in dzs_qd]
+    if both:
+        lines += ["### QD against FD", "",
+                  "| dz | response | earthquakes | first (yr) | mean recurrence (yr) | largest slip rate (m/s) | "
+                  "mean slip per event (m) |", "|---|---|---|---|---|---|---|"]
+        for dz in both:
+            for name, r in (("QD", res["runs"][dz]), ("FD", fd[dz])):
+                ev = r["events"]
+                rec = f"{np.mean(r['recurrence_yr']):.2f}" if r["recurrence_yr"] else "-"
+                lines.append(f"| {dz} m | {name} | {len(r['earthquakes_yr'])} | {r['earthquakes_yr'][0]:.2f} | {rec} | "
+                             f"{max(ev['peak_slip_rate']):.2f} | {np.mean(ev['mean_slip']):.2f} |")
+        lines.append("")
+    return lines
+
+
 def write_page(res, dzs, page, figs, command):
     runs = res["runs"]
-    lines = ["# Sequences: SEAS BP1-QD", "",
+    lines = ["# Sequences: SEAS BP1-QD and BP1-FD" if res.get("fd") else "# Sequences: SEAS BP1-QD", "",
              f"Written by `{command}` (studies/cycles/run.py) from its runs; every number below is in "
              "OUT/cycles_results.json.", "",
              "SEAS BP1-QD (Erickson et al. 2020, Seismol. Res. Lett. 91): a vertical strike-slip fault in a half "
@@ -237,14 +312,8 @@ def write_page(res, dzs, page, figs, command):
                   "that start within a year of each other are one: a rupture that stops at depth and starts again "
                   "within hours); the earthquakes start at (years) "
                   + ", ".join(f"{x:.2f}" for x in r["earthquakes_yr"]) + "; recurrence intervals (years): "
-                  + ", ".join(f"{x:.2f}" for x in r["recurrence_yr"]), "",
-                  "| event | start (yr) | duration (s) | hypocentre depth (km) | peak slip rate (m/s) | mean slip (m) | "
-                  "moment per length (N/m) |", "|---|---|---|---|---|---|---|"]
-        for i in range(len(ev["t_start"])):
-            lines.append(f"| {i} | {ev['t_start'][i] / YEAR:.3f} | {ev['duration'][i]:.1f} | "
-                         f"{ev['hypocentre_x1'][i] / 1e3:.2f} | {ev['peak_slip_rate'][i]:.3f} | "
-                         f"{ev['mean_slip'][i]:.3f} | {ev['moment'][i]:.4g} |")
-        lines.append("")
+                  + ", ".join(f"{x:.2f}" for x in r["recurrence_yr"]), ""]
+        lines += events_table(ev)
     if res.get("domain"):
         lines += ["## The periodic images", "",
                   f"The grid holds the fault, its mirror image above the surface and the creeping plane down to "
@@ -293,6 +362,8 @@ def write_page(res, dzs, page, figs, command):
               "some of them stopping at depth and restarting within hours; the description's ~5 m/s is for every "
               "earthquake. A 25 m run and the platform's station data (not on this machine) would tell whether "
               "this is resolution or the description's round figure.", ""]
+    if res.get("fd"):
+        lines += _fd_section(res, dzs)
     if res.get("ensemble"):
         e = res["ensemble"]
         lines += ["## An ensemble of sequences", "",
@@ -317,6 +388,7 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("-o", "--out", default="out/cycles")
     p.add_argument("--dz", type=float, nargs="+", default=[50.0, 25.0])
+    p.add_argument("--fd", type=float, nargs="*", default=[], help="spacings of BP1-FD runs")
     p.add_argument("--years", type=float, default=1500.0)
     p.add_argument("--tolerance", type=float, default=1e-7)
     p.add_argument("--report-only", action="store_true")
@@ -329,9 +401,13 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.report_only:
+        for dz in args.fd:
+            run_one(out, dz, args.years, args.tolerance, force=args.force, dynamic=True)
         for dz in args.dz:
             run_one(out, dz, args.years, args.tolerance, force=args.force)
     res = analyse(out, args.dz)
+    if args.fd:
+        res["fd"] = analyse(out, args.fd, dynamic=True)["runs"]
     if args.ensemble:
         res["ensemble"] = analyse_ensemble(args.ensemble)
     res["domain"] = run_domain(out) if not args.report_only or (out / "domain_depth80km.json").exists() else {}
@@ -342,7 +418,9 @@ def main(argv=None) -> int:
     figdir.mkdir(parents=True, exist_ok=True)
     page = Path(args.page)
     figs = [fig_max_rate(out, args.dz, figdir), fig_station(out, args.dz[-1], figdir)] + \
-        [fig_profiles(out, dz, figdir) for dz in args.dz]
+        [fig_profiles(out, dz, figdir) for dz in args.dz] + \
+        [fig_qd_fd(out, dz, figdir) for dz in args.fd if dz in args.dz] + \
+        [fig_profiles(out, dz, figdir, dynamic=True) for dz in args.fd]
     rel = [Path("..") / "figures" / f.name for f in figs]
     write_page(res, args.dz, page, rel, "python -m studies.cycles.run " + " ".join(argv or sys.argv[1:]))
     print(f"wrote {page}")
