@@ -35,8 +35,7 @@ class DynamicResponse:
         self.moving = np.flatnonzero(q.ravel() > 0)         # the q = 0 mode has no history
         qm = q.ravel()[self.moving]
         self.dynamic = 0.5 * material.mu * qm
-        X, _ = self.static.spectra({c: np.zeros(grid.shape) for c in self.static.components})
-        self.engines = {ch: VariableHistory(ch, material.nu, qm * material.cs, h_floor) for ch in X}
+        self.engines = {ch: VariableHistory(ch, material.nu, qm * material.cs, h_floor) for ch in self.static.factor}
         self._AB = None
 
     def start(self, v: dict) -> None:
