@@ -342,6 +342,10 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     during a run into a local store stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
+    from .objectstore import check_url, is_url
+
+    if is_url(store):                   # its scheme, credentials and bucket, before any step
+        check_url(str(store))
     if scene.sequence is not None:      # a sequence of earthquakes: the adaptive step (output/sequence.py)
         from .sequence import run_sequence
 

@@ -131,3 +131,66 @@ def test_simulate_refuses_a_bad_url_before_any_step(s3_env, monkeypatch):
     assert keys(s3_env, bucket) == []
     with pytest.raises(StoreError, match="no store"):
         cracklab.simulate(sc, store="foo://bucket/run.zarr")
+
+
+# ---------------------------------------------------------------------------- verify
+def _s3(server):
+    import boto3
+
+    from s3_server import KEYS
+
+    return boto3.client("s3", endpoint_url=server.endpoint, region_name="us-east-1",
+                        aws_access_key_id=KEYS["AWS_ACCESS_KEY_ID"], aws_secret_access_key=KEYS["AWS_SECRET_ACCESS_KEY"])
+
+
+def test_verify_reads_every_chunk_of_a_run_on_the_object_store(s3_env, tmp_path):
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/run.zarr"
+    res = CliRunner().invoke(main, _run_args(url) + ["--set", "record.fields=['delta_2']"])
+    assert res.exit_code == 0, res.output
+    local = tmp_path / "run.zarr"
+    res = CliRunner().invoke(main, _run_args(str(local)) + ["--set", "record.fields=['delta_2']"])
+    assert res.exit_code == 0, res.output
+
+    res = CliRunner().invoke(main, ["verify", url])
+    assert res.exit_code == 0, res.output
+    head = res.output.splitlines()[0]
+    assert head.startswith(f"cracklab verify: {url}: run (status complete)") and head.endswith(": sound"), head
+    assert head.split(": run")[1] == CliRunner().invoke(main, ["verify", str(local)]).output.splitlines()[0] \
+        .split(": run")[1]                              # as many arrays and chunks read as from a local disk
+
+    client = _s3(s3_env)
+    key = "run.zarr/delta_2/c/0/0/0"
+    data = bytearray(client.get_object(Bucket=bucket, Key=key)["Body"].read())
+    data[len(data) // 2] ^= 0xFF                        # a changed byte in a chunk
+    client.put_object(Bucket=bucket, Key=key, Body=bytes(data))
+    client.delete_object(Bucket=bucket, Key="run.zarr/x1/c/0")     # a chunk gone
+    res = CliRunner().invoke(main, ["verify", url])
+    assert res.exit_code == 1, res.output
+    out = res.output
+    assert f"DAMAGED {url}/delta_2/c/0/0/0: chunk (0, 0, 0) of delta_2 cannot be read (checksum mismatch" in out, out
+    assert f"DAMAGED {url}/x1/c/0: chunk (0,) of x1 is missing" in out, out
+    assert f"what to do: run it again from its scene file: cracklab run SCENE.toml -o STORE" in out
+    assert "--resume" not in out                         # a URL store has no checkpoints to resume from
+    assert "cracklab-test-secret" not in out and "cracklab-test-key" not in out
+
+
+def test_verify_of_an_ensemble_on_the_object_store_says_what_to_do(s3_env):
+    import zarr
+
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    zarr.open_group(url, mode="w", zarr_format=3).update_attributes({"cracklab_ensemble": 1})
+    line = one_error_line(["verify", url])
+    assert url in line and "ensemble" in line and "local path" in line, line
+
+
+def test_a_scheme_whose_package_is_not_installed_names_it(tmp_path):
+    pytest.importorskip("fsspec")
+    try:
+        import gcsfs  # noqa: F401
+        pytest.skip("gcsfs is installed")
+    except ImportError:
+        pass
+    line = one_error_line(_run_args("gs://bucket/x.zarr"))
+    assert "gs://bucket/x.zarr" in line and "not installed" in line and "gcsfs" in line, line
