@@ -332,7 +332,8 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     complete store is returned as is once every chunk of it has been read and checked
     (``cracklab.output.verify``). A damaged store is not served: a complete one, or one damaged
     before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
-    the damaged files). Store problems raise StoreError.
+    the damaged files). Store problems raise StoreError; a store given as a URL is checked
+    before any step (``objectstore.check_url``: its scheme, credentials and bucket).
 
     ``check_memory``: estimate the run's memory first (``cracklab.solver.budget``) and raise
     ``MemoryBudgetError`` before any step when it exceeds the memory available.

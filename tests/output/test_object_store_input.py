@@ -173,6 +173,9 @@ def test_verify_reads_every_chunk_of_a_run_on_the_object_store(s3_env, tmp_path)
     assert f"what to do: run it again from its scene file: cracklab run SCENE.toml -o STORE" in out
     assert "--resume" not in out                         # a URL store has no checkpoints to resume from
     assert "cracklab-test-secret" not in out and "cracklab-test-key" not in out
+    res = CliRunner().invoke(main, ["verify", "--quick", url])     # the listing only: the missing chunk
+    assert res.exit_code == 1 and f"DAMAGED {url}/x1/c/0: chunk (0,) of x1 is missing" in res.output, res.output
+    assert "delta_2/c/0/0/0" not in res.output
 
 
 def test_verify_of_an_ensemble_on_the_object_store_says_what_to_do(s3_env):
