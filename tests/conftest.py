@@ -11,6 +11,7 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 import verification  # noqa: E402
+from s3_server import S3Server  # noqa: E402
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verification.md"
 
@@ -70,6 +71,29 @@ SLOW = frozenset({
     "tests/solver/test_budget.py::test_a_sweep_checks_every_member_before_the_cluster_starts",
     "tests/docs/test_site.py",
 })
+
+
+# ----------------------------------------------------------------------------- object storage
+@pytest.fixture(scope="session")
+def s3_server():
+    """An S3 API server (moto) on 127.0.0.1 and a free port, one for the session (under
+    pytest-xdist: one per worker process), stopped at its end (tests/s3_server.py)."""
+    server = S3Server().start()
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+@pytest.fixture
+def s3_env(s3_server, monkeypatch, tmp_path):
+    """The environment that points clients at ``s3_server`` (endpoint, made-up keys, no
+    ~/.aws), set for this test; yields the server."""
+    for name, value in s3_server.env(str(tmp_path)).items():
+        monkeypatch.setenv(name, value)
+    for name in ("AWS_PROFILE", "AWS_SESSION_TOKEN", "AWS_ENDPOINT_URL_S3"):
+        monkeypatch.delenv(name, raising=False)
+    yield s3_server
 
 
 def is_slow(nodeid: str) -> bool:

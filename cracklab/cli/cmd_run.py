@@ -156,6 +156,12 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
     typed = click.get_current_context().get_parameter_source
     done, first = False, 0
     if path is None:            # a URL: simulate writes it, but checkpoints only into a local path
+        from ..output.objectstore import check_url
+
+        try:
+            check_url(output)   # its scheme, credentials and bucket, before the note and any step
+        except StoreError as exc:
+            raise fail(exc) from None
         if typed("resume") == click.core.ParameterSource.COMMANDLINE and resume:
             raise click.ClickException(f"--resume: {output} is a URL; runs into an object store have no "
                                        f"checkpoints to resume from: drop --resume, or write to a local path")

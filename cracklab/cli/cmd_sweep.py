@@ -54,7 +54,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
     import importlib
 
     from ..ensemble import load_study, run_study
-    from ..errors import InputError
+    from ..errors import InputError, StoreError
 
     for module in imports:
         try:
@@ -73,7 +73,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
         result = run_study(spec, output, scheduler=scheduler, workers=workers, resume=resume,
                            progress=progress, overwrite=overwrite, check_memory=not no_memory_check,
                            check_disk=not no_disk_check)
-    except InputError as exc:
+    except (InputError, StoreError) as exc:
         raise fail(exc, SWEEP_FLAGS) from None
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"store: cannot write {output}: {exc.strerror or exc}") from None

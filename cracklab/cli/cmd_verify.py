@@ -9,12 +9,13 @@ from .common import main
 
 
 @main.command()
-@click.argument("store", type=click.Path(exists=True, file_okay=False))
+@click.argument("store")
 @click.option("--quick", is_flag=True,
               help="Check the metadata and that every chunk is present, without reading the data "
                    "(no checksums; only the scene's input arrays are read, for its digest).")
 def verify(store, quick) -> None:
-    """Check every array of a run or an ensemble STORE: metadata, the arrays a run holds,
+    """Check every array of a run or an ensemble STORE (a local path or a URL such as
+    s3://bucket/run.zarr): metadata, the arrays a run holds,
     every chunk present and (unless --quick) read with its checksum, and the metadata
     readers see against what is stored.
 

@@ -107,10 +107,16 @@ def check_metadata(store, meta, remedy):
 def check_store(store: str):
     """Refuse, before anything is written, a path that cannot become or be an ensemble
     store: a file, a non-empty directory that is not a Zarr group, a Zarr group that is
-    not an ensemble (e.g. a single run), or a store of a newer ensemble format."""
+    not an ensemble (e.g. a single run), or a store of a newer ensemble format; a URL
+    whose scheme has no store, whose credentials are missing or whose bucket does not
+    exist (StoreError, ``cracklab.output.objectstore.check_url``)."""
     import zarr
 
-    if "://" not in store:
+    if "://" in store:              # its scheme, credentials and bucket (cracklab.output.objectstore)
+        from ..output.objectstore import check_url
+
+        check_url(store)
+    else:
         p = Path(store)
         if p.exists() and not p.is_dir():
             raise InputError("store", f"{store} is a file, not a Zarr store; choose another path")

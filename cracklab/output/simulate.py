@@ -332,7 +332,8 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     complete store is returned as is once every chunk of it has been read and checked
     (``cracklab.output.verify``). A damaged store is not served: a complete one, or one damaged
     before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
-    the damaged files). Store problems raise StoreError.
+    the damaged files). Store problems raise StoreError; a store given as a URL is checked
+    before any step (``objectstore.check_url``: its scheme, credentials and bucket).
 
     ``check_memory``: estimate the run's memory first (``cracklab.solver.budget``) and raise
     ``MemoryBudgetError`` before any step when it exceeds the memory available.
@@ -342,6 +343,10 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     during a run into a local store stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
+    from .objectstore import check_url, is_url
+
+    if is_url(store):                   # its scheme, credentials and bucket, before any step
+        check_url(str(store))
     if scene.sequence is not None:      # a sequence of earthquakes: the adaptive step (output/sequence.py)
         from .sequence import run_sequence
 

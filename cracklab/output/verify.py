@@ -97,6 +97,9 @@ class Report:
                         "and rewrites the member table and the consolidated metadata")
             return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the damaged members "
                     "(--no-resume recomputes every member)")
+        if "://" in self.store:
+            return ("run it again from its scene file: cracklab run SCENE.toml -o STORE (a store at a URL has no "
+                    "checkpoints: the run starts over and replaces it)")
         if any(d.what.startswith(SCENE_CHANGED) for d in self.damage):
             return ("run it again from its scene file with --resume, which recomputes a damaged store: cracklab run "
                     "SCENE.toml -o STORE --resume (not the store itself: its scene was changed)")
@@ -156,6 +159,8 @@ def read_json(path: Path):
 
 
 def _subdirs(path: Path) -> list[str]:
+    if hasattr(path, "subdirs"):        # a store at a URL (objectstore.StoredTree)
+        return [n for n in path.subdirs() if not n.startswith(".")]
     try:
         return sorted(e.name for e in os.scandir(path) if e.is_dir() and not e.name.startswith("."))
     except OSError:
@@ -251,6 +256,8 @@ def _why(exc) -> str:
 # ---------------------------------------------------------------------------- what readers see
 def run_remedy(store) -> str:
     """What repairs a run store whose metadata no longer matches its data."""
+    if "://" in str(store):
+        return f"cracklab run SCENE.toml -o {store} writes the run again"
     return f"cracklab run SCENE.toml -o {store} --resume recomputes the run"
 
 
@@ -441,13 +448,13 @@ def _check_scene(p: Path, attrs: dict, inputs, names, status, report: Report, me
 # ---------------------------------------------------------------------------- a run
 def check_run(path, *, read: bool = True, snapshots: int | None = None, final: bool | None = None,
               member: str | None = None, report: Report | None = None) -> Report:
-    """Check the run store at ``path`` (a local directory).
+    """Check the run store at ``path`` (a local directory, or an ``objectstore.StoredTree``).
 
     ``snapshots``: how many snapshots must be written (default: all, for a run that
     ended; those up to its checkpoint for a running one); ``final``: whether the
     end-of-run arrays must be there (default: when ``cracklab_status`` is complete or
     failed). ``member``: the ensemble member id the damage is reported under."""
-    p = Path(path)
+    p = path if hasattr(path, "subdirs") else Path(path)      # a local path, or a StoredTree (a URL)
     rep = report if report is not None else Report(str(p), "run")
     doc, why = read_json(p / "zarr.json")
     if doc is None:
@@ -558,12 +565,19 @@ def check_ensemble(store, *, read: bool = True) -> Report:
 
 
 def verify(store, *, read: bool = True) -> Report:
-    """The ``Report`` of a run or ensemble store (a local path)."""
+    """The ``Report`` of a run or ensemble store: a local path, or the URL of a run's
+    store (``s3://bucket/run.zarr``; its keys listed once, every chunk read over the
+    network; checked first by ``objectstore.check_url``)."""
     from ..errors import StoreError
+    from .objectstore import StoredTree, check_url, is_url
 
-    p = Path(os.fspath(store)).expanduser()
-    if not p.is_dir():
-        raise StoreError(p, "does not exist or is not a directory (a Zarr store)")
+    if is_url(store):
+        url = os.fspath(store).rstrip("/")
+        p = StoredTree(*check_url(url, exists=True), url)
+    else:
+        p = Path(os.fspath(store)).expanduser()
+        if not p.is_dir():
+            raise StoreError(p, "does not exist or is not a directory (a Zarr store)")
     doc, why = read_json(p / "zarr.json")
     if doc is None:
         rep = Report(str(p), "run")
@@ -571,6 +585,9 @@ def verify(store, *, read: bool = True) -> Report:
         return rep
     attrs = doc.get("attributes", {}) or {}
     if "cracklab_ensemble" in attrs:
+        if isinstance(p, StoredTree):
+            raise StoreError(p, "is an ensemble store; cracklab verify checks ensembles on a local disk only for "
+                                "now: copy the store to a local path (e.g. aws s3 sync) and verify it there")
         return check_ensemble(p, read=read)
     if "scene" in attrs or "cracklab_run_format" in attrs:
         return check_run(p, read=read)
