@@ -249,9 +249,10 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
 
     Where the time goes: the timed half alternates blocks of STAGE_BLOCK plain steps (the
     median ``ms_per_step``, ``timed_steps``) with blocks timed by stage (:class:`StageClock`):
-    ``stages_ms``, the median ms per step of each of STAGES, ``stages_total_ms`` the median
-    of those steps (the stages' medians sum to about it, and it is the plain step's cost
-    plus the clock's own, a few microseconds per wrapped call), ``stage_steps`` their count.
+    ``stages_ms``, the mean ms per step of each of STAGES over the steps whose totals are in
+    the middle half, ``stages_total_ms`` the mean of those totals (the stages sum to it, and
+    it is the plain step's cost plus the clock's own, a few microseconds per wrapped call),
+    ``stage_steps`` the steps timed by stage.
     With the overlap (two or more engine threads) the advance on the worker is not in the
     step's stages; the caller's ``wait`` for it is, and ``worker_ms`` is the worker's busy
     time per step (the wrapped advances and start-up weights it ran).
@@ -324,7 +325,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "fit_steps": max(scene.nsteps, fit_steps or 0),
         "stage_steps": len(staged),
         "stages_ms": stages,
-        "stages_total_ms": 1e3 * float(np.median([row[0] for row in staged])) if staged else None,
+        "stages_total_ms": stage_total(staged),
         "worker_ms": 1e3 * clock.worker / len(staged) if overlap and staged else None,
         "terms": {name: getattr(ch.engine, "pairs", None) for name, ch in response.channels.items()},
         "fft_backend": backend_name(),
@@ -335,14 +336,31 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     }
 
 
+def _middle(rows):
+    """The rows of the steps timed by stage whose totals are in the middle half (the
+    outliers of a shared host left out), as an array."""
+    a = np.asarray(rows, dtype=float)
+    lo, hi = np.percentile(a[:, 0], [25, 75])
+    keep = (a[:, 0] >= lo) & (a[:, 0] <= hi)
+    return a[keep] if keep.any() else a
+
+
 def stage_breakdown(rows) -> dict | None:
-    """{stage: median ms per step} of the steps timed by stage, ``rows`` of [total, then the
-    seconds of each stage of STAGES but glue]; glue is each step's total less its stages."""
+    """{stage: ms per step} of the steps timed by stage, ``rows`` of [total, then the
+    seconds of each stage of STAGES but glue]; glue is each step's total less its stages.
+    Means over the steps whose totals are in the middle half: they sum to
+    ``stage_total(rows)`` (a per-stage median would not: the spread of a loaded host falls
+    in one stage or another from step to step)."""
     if not rows:
         return None
-    a = np.asarray(rows, dtype=float)
+    a = _middle(rows)
     per = np.column_stack([a[:, 1:], a[:, 0] - a[:, 1:].sum(axis=1)])
-    return {stage: 1e3 * float(np.median(per[:, i])) for i, stage in enumerate(STAGES)}
+    return {stage: 1e3 * float(np.mean(per[:, i])) for i, stage in enumerate(STAGES)}
+
+
+def stage_total(rows) -> float | None:
+    """ms per step of the steps ``stage_breakdown`` averages."""
+    return 1e3 * float(np.mean(_middle(rows)[:, 0])) if rows else None
 
 
 def _newton_counts(state):
