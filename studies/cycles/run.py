@@ -248,7 +248,7 @@ def events_table(ev) -> list:
     return lines + [""]
 
 
-def _fd_section(res, dzs_qd):
+def _fd_section(res):
     """The page's lines on BP1-FD: cost, events, and QD against FD at the spacings run both ways."""
     fd = res["fd"]
     lines = ["## BP1-FD: the fully dynamic response", "",
@@ -269,13 +269,14 @@ def _fd_section(res, dzs_qd):
                   "starting at (years) " + ", ".join(f"{x:.2f}" for x in r["earthquakes_yr"])
                   + "; recurrence intervals (years): " + ", ".join(f"{x:.2f}" for x in r["recurrence_yr"]), ""]
         lines += events_table(ev)
-    both = [dz for dz in fd if float(dz) in dzs_qd]
+    qd = res.get("qd_at_fd", {})
+    both = [dz for dz in fd if dz in qd]
     if both:
         lines += ["### QD against FD", "",
                   "| dz | response | earthquakes | first (yr) | mean recurrence (yr) | largest slip rate (m/s) | "
                   "mean slip per event (m) |", "|---|---|---|---|---|---|---|"]
         for dz in both:
-            for name, r in (("QD", res["runs"][dz]), ("FD", fd[dz])):
+            for name, r in (("QD", qd[dz]), ("FD", fd[dz])):
                 ev = r["events"]
                 rec = f"{np.mean(r['recurrence_yr']):.2f}" if r["recurrence_yr"] else "-"
                 lines.append(f"| {dz} m | {name} | {len(r['earthquakes_yr'])} | {r['earthquakes_yr'][0]:.2f} | {rec} | "
@@ -363,7 +364,7 @@ def write_page(res, dzs, page, figs, command):
               "earthquake. A 25 m run and the platform's station data (not on this machine) would tell whether "
               "this is resolution or the description's round figure.", ""]
     if res.get("fd"):
-        lines += _fd_section(res, dzs)
+        lines += _fd_section(res)
     if res.get("ensemble"):
         e = res["ensemble"]
         lines += ["## An ensemble of sequences", "",
@@ -408,6 +409,7 @@ def main(argv=None) -> int:
     res = analyse(out, args.dz)
     if args.fd:
         res["fd"] = analyse(out, args.fd, dynamic=True)["runs"]
+        res["qd_at_fd"] = analyse(out, [dz for dz in args.fd if store_of(out, dz).exists()])["runs"]
     if args.ensemble:
         res["ensemble"] = analyse_ensemble(args.ensemble)
     res["domain"] = run_domain(out) if not args.report_only or (out / "domain_depth80km.json").exists() else {}
@@ -419,7 +421,7 @@ def main(argv=None) -> int:
     page = Path(args.page)
     figs = [fig_max_rate(out, args.dz, figdir), fig_station(out, args.dz[-1], figdir)] + \
         [fig_profiles(out, dz, figdir) for dz in args.dz] + \
-        [fig_qd_fd(out, dz, figdir) for dz in args.fd if dz in args.dz] + \
+        [fig_qd_fd(out, dz, figdir) for dz in args.fd if store_of(out, dz).exists()] + \
         [fig_profiles(out, dz, figdir, dynamic=True) for dz in args.fd]
     rel = [Path("..") / "figures" / f.name for f in figs]
     write_page(res, args.dz, page, rel, "python -m studies.cycles.run " + " ".join(argv or sys.argv[1:]))
