@@ -49,9 +49,10 @@ def run_one(out, dz, years, tolerance, force=False, log=print, dynamic=False) ->
             return json.loads(meta_path.read_text())
     log(f"dz = {dz:g} m: {scene.grid.n1} nodes, {years:g} years -> {store}", flush=True)
     t0 = time.time()
-    ds = simulate(scene, store=str(store))
+    ds = simulate(scene, store=str(store), resume=True)       # a killed run goes on from its checkpoint
     wall = time.time() - t0
     meta = {"dz": dz, "years": years, "tolerance": scene.sequence.tolerance, "wall_s": wall, "nodes": scene.grid.n1,
+            "resumed_from": ds.attrs.get("cracklab_resumed_from"),
             **{k: ds.attrs[k] for k in ("accepted_steps", "smallest_step", "largest_step")}}
     meta_path.write_text(json.dumps(meta, indent=1))
     log(f"dz = {dz:g} m: done in {wall:.0f} s, {meta['accepted_steps']} steps", flush=True)
@@ -259,7 +260,8 @@ def _fd_section(res):
              "| dz | nodes | years | wall time | accepted steps | smallest step | largest step | steps in events | "
              "time in events |", "|---|---|---|---|---|---|---|---|---|"]
     for dz, r in fd.items():
-        lines.append(f"| {dz} m | {r['nodes']} | {r['years']:g} | {r['wall_s']:.0f} s | {r['accepted_steps']} | "
+        wall = f"{r['wall_s']:.0f} s" + (" (resumed)" if r.get("resumed_from") is not None else "")
+        lines.append(f"| {dz} m | {r['nodes']} | {r['years']:g} | {wall} | {r['accepted_steps']} | "
                      f"{r['smallest_step']:.2g} s | {r['largest_step'] / YEAR:.2g} yr | {r['steps_in_events']} | "
                      f"{r['time_in_events_s']:.0f} s |")
     lines += ["", "Wall times on a shared 2-core host (other jobs running), not a benchmark.", ""]
