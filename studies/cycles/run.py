@@ -52,7 +52,8 @@ def run_one(out, dz, years, tolerance, force=False, log=print, dynamic=False) ->
     ds = simulate(scene, store=str(store), resume=True)       # a killed run goes on from its checkpoint
     wall = time.time() - t0
     meta = {"dz": dz, "years": years, "tolerance": scene.sequence.tolerance, "wall_s": wall, "nodes": scene.grid.n1,
-            "resumed_from": ds.attrs.get("cracklab_resumed_from"),
+            "resumed_from": None if ds.attrs.get("cracklab_resumed_from") is None else
+            int(ds.attrs["cracklab_resumed_from"]),
             **{k: ds.attrs[k] for k in ("accepted_steps", "smallest_step", "largest_step")}}
     meta_path.write_text(json.dumps(meta, indent=1))
     log(f"dz = {dz:g} m: done in {wall:.0f} s, {meta['accepted_steps']} steps", flush=True)
