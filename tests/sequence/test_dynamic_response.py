@@ -11,6 +11,7 @@ import numpy as np
 def test_steady_sliding_gives_the_static_traction_and_back_the_radiation_damping():
     from cracklab import Grid, Material
     from cracklab.solver.sequence.dynamic import DynamicResponse
+    from cracklab.solver.sequence.static import StaticResponse
 
     mat = Material(mu=30e9, cs=3000.0, nu=0.25)
     grid = Grid(n1=16, n3=8, L1=16e3, L3=8e3)
@@ -19,7 +20,7 @@ def test_steady_sliding_gives_the_static_traction_and_back_the_radiation_damping
          3: 3e-10 * np.cos(4 * np.pi * x1 / 16e3)}
     eta = mat.mu / (2 * mat.cs)
     h = 0.5 * 1e3 / mat.cs
-    resp = DynamicResponse(mat, grid, (1, 3), h)
+    resp = DynamicResponse(StaticResponse(mat, grid, (1, 3)), mat, grid, h)
     resp.start(v)
     t, errors = 0.0, []
     for n in range(220):
@@ -109,3 +110,4 @@ def test_a_last_step_that_fails_its_tolerance_is_split():
         signal.alarm(0)
         signal.signal(signal.SIGALRM, old)
     assert float(ds.t_station[-1]) == 6.0
+

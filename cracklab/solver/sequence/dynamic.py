@@ -22,16 +22,16 @@ from .static import StaticResponse
 
 
 class DynamicResponse:
-    """The traction of Eq. (33) between two identical half spaces of ``material`` on ``grid``
-    for the slipping ``components``, at steps no shorter than ``h_floor``; ``stiffness``: the
-    spring on the mean slip (static.py).
+    """The traction of Eq. (33) between two identical half spaces of ``material`` on ``grid``,
+    at steps no shorter than ``h_floor``: the ``static`` response (its components, channels,
+    transforms and spring, static.py) plus the convolution of each moving mode.
 
     Per step: :meth:`prepare` (h), then :meth:`traction` (slip, slip rate at the step's end)
     as often as the step needs, then :meth:`commit` (the end's slip rate)."""
 
-    def __init__(self, material, grid, components, h_floor, stiffness=0.0, transforms=None):
-        self.static = StaticResponse(material, grid, components, stiffness=stiffness, transforms=transforms)
-        q = np.broadcast_to(self.static.q, grid.spectral_shape)
+    def __init__(self, static: StaticResponse, material, grid, h_floor):
+        self.static = static
+        q = np.broadcast_to(static.q, grid.spectral_shape)
         self.moving = np.flatnonzero(q.ravel() > 0)         # the q = 0 mode has no history
         qm = q.ravel()[self.moving]
         self.dynamic = 0.5 * material.mu * qm
@@ -83,34 +83,26 @@ class FullyDynamic(QuasiDynamic):
                  h_floor=None):
         super().__init__(material, grid, law, tau0, sigma, plate, creep=creep, stiffness=stiffness,
                          transforms=transforms)
-        self.response = DynamicResponse(material, grid, self.comps, h_floor, stiffness=self.stiffness,
-                                        transforms=self.static.fft)
-        self.static = self.response.static
-        self.v_end = None       # {component: the slip rate the step's end is taken at}
+        self.response = DynamicResponse(self.static, material, grid, h_floor)
+        self.v_end = None       # {component: the slip rate field the step's end is taken at}
         self.started = False    # whether the history holds t = 0 (before: no convolution)
 
     def start(self, f):
         """Start the history with the slip rates of the rates ``f`` at t = 0."""
-        self.response.start(self.grids(self.velocities(f)))
+        self.response.start(self.rate_fields(f))
         self.started = True
 
-    def traction(self, t, y):
-        if not self.started:      # t = 0: no history
-            return super().traction(t, y)
-        delta, _ = self.split(y)
-        shape = self.grid.shape
-        F = self.response.traction({c: delta[c].reshape(shape) for c in self.comps},
-                                   {c: self.v_end[c].reshape(shape) for c in self.comps})
-        return {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+    def elastic(self, delta):
+        """The static response until the history starts, then Eq. (33) at the step's end."""
+        if not self.started:
+            return super().elastic(delta)
+        return self.response.traction(delta, self.v_end)
 
-    def velocities(self, dy):
-        """{component: slip rate} of the rates ``dy``."""
+    def rate_fields(self, dy):
+        """{component: slip rate field} of the rates ``dy``."""
         dd, _ = self.split(dy)
-        return {c: dd[c] for c in self.comps}
-
-    def grids(self, v):
         shape = self.grid.shape
-        return {c: v[c].reshape(shape) for c in self.comps}
+        return {c: dd[c].reshape(shape) for c in self.comps}
 
     def get_state(self) -> dict:
         return {"history": self.response.get_state()}

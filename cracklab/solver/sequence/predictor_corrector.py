@@ -48,7 +48,7 @@ def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=No
             if last and not split:      # the step that reaches t_end failed: try shorter ones
                 h, split = min(h, 0.5 * step), True
         h_next = control.next_step(step, size, ORDER, accepted=True) if not last else h
-        system.response.commit(system.grids(system.velocities(f_new)))
+        system.response.commit(system.rate_fields(f_new))
         t, y, f = (t_end if last else t + step), y_new, f_new
         n += 1
         yield Accepted(n, t, y, step, h_next, rejected, f)
@@ -59,11 +59,11 @@ def _try(system, t, y, f, h):
     """(y', f', error estimate, whether the rates stayed finite) of one step of ``h``."""
     system.response.prepare(h)
     try:
-        system.v_end = system.velocities(f)
+        system.v_end = system.rate_fields(f)
         y_p = y + h * f
         f_p = system.rates(t + h, y_p)
         y_c = y + 0.5 * h * (f + f_p)
-        system.v_end = system.velocities(f_p)
+        system.v_end = system.rate_fields(f_p)
         f_c = system.rates(t + h, y_c)
     except (SimulationError, FloatingPointError):
         return y, f, np.full_like(y, np.nan), False

@@ -66,11 +66,15 @@ class QuasiDynamic:
         return np.concatenate([np.zeros(self.n * len(self.comps)), psi])
 
     def traction(self, t, y):
-        """{component: tau*} at (t, y): load, static response and the spring's load."""
+        """{component: tau*} at (t, y): load, elastic response and the spring's load."""
         delta, _ = self.split(y)
         shape = self.grid.shape
-        F = self.static.traction({c: delta[c].reshape(shape) for c in self.comps})
+        F = self.elastic({c: delta[c].reshape(shape) for c in self.comps})
         return {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+
+    def elastic(self, delta: dict) -> dict:
+        """{component: F} of the slip fields ``delta``: the static response."""
+        return self.static.traction(delta)
 
     def rates(self, t, y):
         """dy/dt at (t, y); keeps (V, tau, v) of the evaluation in ``last``."""
