@@ -111,3 +111,17 @@ def test_a_last_step_that_fails_its_tolerance_is_split():
         signal.signal(signal.SIGALRM, old)
     assert float(ds.t_station[-1]) == 6.0
 
+
+def test_a_non_finite_step_at_the_floor_names_its_place():
+    """The message of a dynamic step that gave NaN names the first non-finite unknown's node
+    and depth, not node 0."""
+    from cracklab import Sequence
+    from cracklab.solver.sequence.predictor_corrector import _failure
+    from cracklab.solver.sequence.run import system_of
+
+    system = system_of(_rupture(Sequence(response="dynamic", plate_rate_3=1e-9, dt_max=1.0)))
+    y = np.zeros(2 * system.n)
+    f = np.zeros_like(y)
+    f[system.n + 123] = np.nan           # the state's rate at node 123
+    text = _failure(system, 10.0, 0.01, y, f)
+    assert "node (123, 0) (x1 = 12300, x3 = 0), state psi" in text and "t = 10 s" in text

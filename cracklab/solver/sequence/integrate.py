@@ -102,12 +102,16 @@ def _try(system, pair, A, b, e, k, t, y, h):
     return y_new, err, bool(np.all(np.isfinite(y_new)))
 
 
-def _failure(system, t, h, y, y_new, err, where, tolerance) -> str:
-    n = system.n
-    part, i = divmod(max(where, 0), n)
+def place(system, where) -> str:
+    """'node (i, k) (x1 = .., x3 = ..), <unknown>' of the index ``where`` of the unknowns y."""
+    part, i = divmod(max(where, 0), system.n)
     names = [f"slip delta_{c}" for c in system.comps] + ["state psi"]
     node = tuple(int(v) for v in np.unravel_index(i, system.grid.shape))
+    return (f"node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}), "
+            f"{names[min(part, len(names) - 1)]}")
+
+
+def _failure(system, t, h, y, y_new, err, where, tolerance) -> str:
     return (f"the step cannot meet its tolerance {tolerance:g} at the smallest step allowed, dt_min = {h:.3g} s: at "
-            f"t = {t:.9g} s, node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}), "
-            f"{names[min(part, len(names) - 1)]} = {y[where]:.6g} -> {y_new[where]:.6g}, error estimate "
+            f"t = {t:.9g} s, {place(system, where)} = {y[where]:.6g} -> {y_new[where]:.6g}, error estimate "
             f"{err[where]:.3g}; loosen sequence.tolerance or lower sequence.dt_min")

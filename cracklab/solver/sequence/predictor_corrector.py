@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import SimulationError
-from .integrate import Accepted, end_step, error_norm
+from .integrate import Accepted, end_step, error_norm, place
 
 ORDER = 2
 
@@ -42,7 +42,7 @@ def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=No
             if size <= 1.0 or (ok and step <= floor):
                 break
             if step <= floor:
-                raise SimulationError(_failure(system, t, step, y, where))
+                raise SimulationError(_failure(system, t, step, y_new, f_new))
             rejected += 1
             h = control.next_step(step, size, ORDER, accepted=False)
             if last and not split:      # the step that reaches t_end failed: try shorter ones
@@ -70,9 +70,10 @@ def _try(system, t, y, f, h):
     return y_c, f_c, 0.5 * h * (f_p - f), bool(np.all(np.isfinite(y_c)) and np.all(np.isfinite(f_c)))
 
 
-def _failure(system, t, h, y, where) -> str:
-    n = system.n
-    part, i = divmod(max(where, 0), n)
-    node = tuple(int(v) for v in np.unravel_index(i, system.grid.shape))
+def _failure(system, t, h, y_new, f_new) -> str:
+    """The message of a step at the floor whose values are not finite, at the first such unknown."""
+    bad = np.flatnonzero(~(np.isfinite(y_new) & np.isfinite(f_new)))
+    where = (f"{place(system, int(bad[0]))} = {y_new[bad[0]]:.6g}, rate {f_new[bad[0]]:.6g}" if bad.size
+             else "the interface law's solve failed")
     return (f"the fully dynamic step gave non-finite values at the dynamic step dt = {h:.3g} s: at t = {t:.9g} s, "
-            f"node {node} (x1 = {system.grid.x1[node[0]]:g}, x3 = {system.grid.x3[node[1]]:g}); lower beta")
+            f"{where}; lower beta")
