@@ -256,11 +256,11 @@ def _dynamic_history(scene) -> int:
     channel the slipping components drive, over the modes of q > 0."""
     from ..elastic.modes import directions
     from ..history.variable import memory
+    from .sequence.run import components_of, steps_of
+    from .sequence.static import CHANNEL
 
     grid, mat = scene.grid, scene.material
     q = np.broadcast_to(directions(grid)[0], grid.spectral_shape).ravel()
     r = q[q > 0] * mat.cs
-    dt_min = scene.sequence.steps(grid.dx_min, mat.cs, scene.t_end, scene.beta)[0]
-    comps = {c for c in scene.components if c in (1, 3)} | set(scene.sequence.plate)
-    channels = ("II", "III") if not grid.plane and len(comps) == 2 else tuple({1: "II", 3: "III"}[c] for c in comps)
-    return sum(memory(ch, mat.nu, r, dt_min) for ch in channels)
+    dt_min = steps_of(scene)[0]
+    return sum(memory(CHANNEL[c], mat.nu, r, dt_min) for c in components_of(scene))

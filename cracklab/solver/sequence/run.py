@@ -35,7 +35,7 @@ def system_of(scene, transforms=None) -> QuasiDynamic:
     """The system of a sequence scene: :class:`QuasiDynamic`, or :class:`FullyDynamic` at
     steps no shorter than the scene's dt_min."""
     seq, law, grid = scene.sequence, scene.law, scene.grid
-    comps = sorted({c for c in scene.components if c in (1, 3)} | set(seq.plate))
+    comps = components_of(scene)
     tau0 = {c: scene.loading.field(c) for c in comps}
     if law.sigma_n is not None:
         sigma = law.sigma_n
@@ -44,12 +44,18 @@ def system_of(scene, transforms=None) -> QuasiDynamic:
     plate = {c: {1: seq.plate_rate_1, 3: seq.plate_rate_3}[c] for c in comps}
     args = (scene.material, grid, law, tau0, sigma, plate)
     if seq.response == "dynamic":
-        dt_min = _steps(scene)[0]
+        dt_min = steps_of(scene)[0]
         return FullyDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, h_floor=dt_min)
     return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms)
 
 
-def _steps(scene):
+def components_of(scene) -> list:
+    """The shear components a sequence scene slips along: the loaded ones and the plate's."""
+    return sorted({c for c in scene.components if c in (1, 3)} | set(scene.sequence.plate))
+
+
+def steps_of(scene) -> tuple:
+    """(dt_min, dt_max, dt_first) of a sequence scene, its defaults filled in."""
     return scene.sequence.steps(scene.grid.dx_min, scene.material.cs, scene.t_end, scene.beta)
 
 
@@ -61,7 +67,7 @@ class SequenceRun:
         self.scene = scene
         seq = scene.sequence
         self.system = system_of(scene)
-        dt_min, dt_max, dt_first = _steps(scene)
+        dt_min, dt_max, dt_first = steps_of(scene)
         self.control = StepControl(tolerance=seq.tolerance, dt_min=dt_min, dt_max=dt_max, dt_first=dt_first)
         self.pair = PAIRS[seq.pair]
         self.dynamic = seq.response == "dynamic"
