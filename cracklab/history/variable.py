@@ -128,10 +128,6 @@ class VariableHistory:
         self.last_h, self.run = None, 0     # the last step committed, and how many in a row were it
         self._cache = None                  # the weights of a run of equal steps (h, arrays)
 
-    @property
-    def modes(self) -> int:
-        return self.r.size
-
     def start(self, V0):
         """Push the value at t = 0 (before the first step)."""
         if self.started:
