@@ -12,6 +12,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import InputError, StoreError
+from ..output.objectstore import check_url, is_url
 from .identity import FORMAT, canonical_json
 from .lock import LOCK_NAME
 from .spec import Member
@@ -112,10 +113,8 @@ def check_store(store: str):
     exist (StoreError, ``cracklab.output.objectstore.check_url``)."""
     import zarr
 
-    if "://" in store:              # its scheme, credentials and bucket (cracklab.output.objectstore)
-        from ..output.objectstore import check_url
-
-        check_url(store)
+    if is_url(store):
+        check_url(store)            # its scheme, credentials and bucket
     else:
         p = Path(store)
         if p.exists() and not p.is_dir():

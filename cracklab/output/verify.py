@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import StoreWarning
 from .checkpoint import is_final_array, scene_digest
+from .objectstore import is_url
 
 CHECKSUM_CODEC = "crc32c"
 SCENE_CHANGED = "the run's scene"      # how a scene that is not the run's own is named
@@ -97,7 +98,7 @@ class Report:
                         "and rewrites the member table and the consolidated metadata")
             return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the damaged members "
                     "(--no-resume recomputes every member)")
-        if "://" in self.store:
+        if is_url(self.store):
             return ("run it again from its scene file: cracklab run SCENE.toml -o STORE (a store at a URL has no "
                     "checkpoints: the run starts over and replaces it)")
         if any(d.what.startswith(SCENE_CHANGED) for d in self.damage):
@@ -256,7 +257,7 @@ def _why(exc) -> str:
 # ---------------------------------------------------------------------------- what readers see
 def run_remedy(store) -> str:
     """What repairs a run store whose metadata no longer matches its data."""
-    if "://" in str(store):
+    if is_url(store):
         return f"cracklab run SCENE.toml -o {store} writes the run again"
     return f"cracklab run SCENE.toml -o {store} --resume recomputes the run"
 
@@ -569,7 +570,7 @@ def verify(store, *, read: bool = True) -> Report:
     store (``s3://bucket/run.zarr``; its keys listed once, every chunk read over the
     network; checked first by ``objectstore.check_url``)."""
     from ..errors import StoreError
-    from .objectstore import StoredTree, check_url, is_url
+    from .objectstore import StoredTree, check_url
 
     if is_url(store):
         url = os.fspath(store).rstrip("/")
