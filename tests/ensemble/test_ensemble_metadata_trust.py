@@ -17,33 +17,18 @@ import zarr
 from click.testing import CliRunner
 
 from cracklab import ensemble as E
+from small_ensemble import copy_of, member_ids, sound_ensemble, sweep
 from cracklab.cli import main
 from cracklab.errors import StoreError
 
-BUILDER = E.Builder("elliptical_crack", n=16, a=0.25, b=0.2, t_end=0.3)
-SWEEP = E.Sweep(product={"p": [1.0, 2.0, 3.0]}, base={"record.every": 2, "record.stations": {"c": [0.5, 0.5]}})
-
-
-def _sweep(store):
-    return E.run(BUILDER, SWEEP, store, scheduler="synchronous", progress=False)
-
-
 @pytest.fixture(scope="module")
 def sound(tmp_path_factory):
-    store = tmp_path_factory.mktemp("trust") / "ens.zarr"
-    assert _sweep(store).ok
-    return store, E.open_ensemble(store).load()
+    return sound_ensemble(tmp_path_factory, "trust")
 
 
 @pytest.fixture
 def store(sound, tmp_path):
-    out = tmp_path / "ens.zarr"
-    shutil.copytree(sound[0], out)
-    return out
-
-
-def _ids(store):
-    return [s["id"] for s in E.member_status(store)]
+    return copy_of(sound, tmp_path)
 
 
 def _edit(path, change):
@@ -70,7 +55,7 @@ def _store_remedy(store):
 def _repaired(store, sound, ran, damaged=()):
     """The rerun of the sweep runs ``ran`` (``damaged`` of them reported damaged) and
     leaves a sound store that plain xarray and open_ensemble read as the reference."""
-    res = _sweep(store)
+    res = sweep(store)
     assert res.ok and res.ran == ran and sorted(res.damaged) == sorted(damaged), res.summary()
     assert _verify(store)[0] == 0
     ens = E.open_ensemble(store).load()
@@ -86,7 +71,7 @@ def _repaired(store, sound, ran, damaged=()):
 
 
 def test_a_deleted_member_is_named_and_run_again(store, sound):
-    a = _ids(store)[0]
+    a = member_ids(store)[0]
     shutil.rmtree(store / "members" / a)
     tree = xr.open_datatree(store, engine="zarr")        # plain xarray reads the consolidated metadata
     assert tree["members"][a].attrs["complete"] is True and np.isnan(tree["members"][a]["delta_2"].values).all()
@@ -102,7 +87,7 @@ def test_a_deleted_member_is_named_and_run_again(store, sound):
 
 
 def test_changed_member_parameters_are_named_refused_and_recomputed(store, sound, tmp_path):
-    b = _ids(store)[1]
+    b = member_ids(store)[1]
     meta = store / "members" / b / "zarr.json"
 
     def params(doc):
@@ -125,7 +110,7 @@ def test_changed_member_parameters_are_named_refused_and_recomputed(store, sound
 
 
 def test_a_changed_scene_path_parameter_is_named(store):
-    b = _ids(store)[1]
+    b = member_ids(store)[1]
     meta = store / "members" / b / "zarr.json"
     mdoc = json.loads(meta.read_text())
     params = json.loads(mdoc["attributes"]["member_params"])
@@ -143,7 +128,7 @@ def test_a_changed_scene_path_parameter_is_named(store):
 
 
 def test_a_changed_member_scene_is_named_and_recomputed(store, sound):
-    c = _ids(store)[2]
+    c = member_ids(store)[2]
     meta = store / "members" / c / "zarr.json"
 
     def nu(doc):
@@ -163,7 +148,7 @@ def test_a_changed_member_scene_is_named_and_recomputed(store, sound):
 
 
 def test_a_changed_member_array_shape_is_named_and_recomputed(store, sound):
-    c = _ids(store)[2]
+    c = member_ids(store)[2]
     meta = store / "members" / c / "delta_2" / "zarr.json"
     _edit(meta, lambda doc: doc.update(shape=[doc["shape"][0] - 2, *doc["shape"][1:]]))
     code, lines = _verify(store, "--quick")
@@ -177,7 +162,7 @@ def test_a_changed_member_array_shape_is_named_and_recomputed(store, sound):
 
 @pytest.mark.parametrize("change", ["status", "parameter", "deleted"])
 def test_a_member_table_out_of_step_is_named_and_rewritten(change, store, sound):
-    b = _ids(store)[1]
+    b = member_ids(store)[1]
     root = zarr.open_group(str(store), mode="a", use_consolidated=False)
     if change == "deleted":
         shutil.rmtree(store / "status")

@@ -26,6 +26,7 @@ import cracklab
 from cracklab import Record
 from cracklab.output import checkpoint as ck
 from cracklab import ensemble as E
+from small_ensemble import copy_of, member_ids, sound_ensemble, sweep
 from cracklab.output import verify as V
 from cracklab.cli import main
 from cracklab.errors import StoreError, StoreWarning
@@ -353,37 +354,18 @@ def test_killed_after_the_status_before_the_clean_up(tmp_path, monkeypatch, refe
 
 
 # ---------------------------------------------------------------------------- ensembles
-BUILDER = E.Builder("elliptical_crack", n=16, a=0.25, b=0.2, t_end=0.3)
-SWEEP = E.Sweep(product={"p": [1.0, 2.0, 3.0]},
-                base={"record.every": 2, "record.stations": {"c": [0.5, 0.5]}})
-
-
-def _sweep(store, **kw):
-    return E.run(BUILDER, SWEEP, store, scheduler="synchronous", progress=False, **kw)
-
-
 @pytest.fixture(scope="module")
 def ensemble_ref(tmp_path_factory):
-    store = tmp_path_factory.mktemp("ens") / "ref.zarr"
-    assert _sweep(store).ok
-    return store, E.open_ensemble(store).load()
+    return sound_ensemble(tmp_path_factory, "ens")
 
 
 @pytest.fixture
 def ens_store(ensemble_ref, tmp_path):
-    import shutil
-
-    store = tmp_path / "ens.zarr"
-    shutil.copytree(ensemble_ref[0], store)
-    return store
-
-
-def _ids(store):
-    return [s["id"] for s in E.member_status(store)]
+    return copy_of(ensemble_ref, tmp_path)
 
 
 def test_damaged_members_are_named_never_served_and_recomputed(ens_store, ensemble_ref):
-    a, b, c = _ids(ens_store)
+    a, b, c = member_ids(ens_store)
     mdir = ens_store / "members"
     _flip(_chunk(mdir / a, "delta_2", 0, 0, 0))
     _chunk(mdir / b, "station_v_2", 0, 0).unlink()
@@ -404,7 +386,7 @@ def test_damaged_members_are_named_never_served_and_recomputed(ens_store, ensemb
     with pytest.raises(ValueError, match="checksum"):
         E.open_member(ens_store, a)["delta_2"].values
     # the rerun finds all three, says so, and recomputes them
-    res = _sweep(ens_store)
+    res = sweep(ens_store)
     assert res.ok and sorted(res.ran) == sorted([a, b, c]) and res.skipped == []
     assert set(res.damaged) == {a, b, c}
     assert "3 ran, 0 already complete, 0 failed" in res.summary()
@@ -413,7 +395,7 @@ def test_damaged_members_are_named_never_served_and_recomputed(ens_store, ensemb
     ens = E.open_ensemble(ens_store).load()
     np.testing.assert_allclose(ens["delta_2"].values, ensemble_ref[1]["delta_2"].values, rtol=0, atol=1e-12)
     np.testing.assert_allclose(ens["station_v_2"].values, ensemble_ref[1]["station_v_2"].values, rtol=0, atol=1e-12)
-    again = _sweep(ens_store)
+    again = sweep(ens_store)
     assert again.ran == [] and len(again.skipped) == 3 and not again.damaged
 
 
@@ -426,13 +408,13 @@ def test_a_garbled_members_group_is_named_and_repaired(ens_store):
     res = CliRunner().invoke(main, ["export", str(ens_store), "--netcdf", str(ens_store.parent / "e.nc")])
     assert res.exit_code == 1 and str(meta) in res.output and len(res.output.strip().splitlines()) == 1
     assert _verify_cli(ens_store)[0] == 1
-    res = _sweep(ens_store)                             # repairs the group; the members are sound
+    res = sweep(ens_store)                             # repairs the group; the members are sound
     assert res.ran == [] and len(res.skipped) == 3
     assert E.open_ensemble(ens_store).sizes["member"] == 3
 
 
 def test_a_garbled_member_group_is_named_and_recomputed(ens_store, ensemble_ref):
-    a = _ids(ens_store)[1]
+    a = member_ids(ens_store)[1]
     meta = ens_store / "members" / a / "zarr.json"
     meta.write_text(meta.read_text()[:-30])
     assert [s["status"] for s in E.member_status(ens_store)].count("damaged") == 1
@@ -440,14 +422,14 @@ def test_a_garbled_member_group_is_named_and_recomputed(ens_store, ensemble_ref)
         E.open_ensemble(ens_store)
     code, out = _verify_cli(ens_store)
     assert code == 1 and f"DAMAGED member {a}: {meta}: the member's group metadata is not valid JSON" in out
-    res = _sweep(ens_store)
+    res = sweep(ens_store)
     assert res.ran == [a] and res.ok
     ens = E.open_ensemble(ens_store).load()
     np.testing.assert_allclose(ens["delta_2"].values, ensemble_ref[1]["delta_2"].values, rtol=0, atol=1e-12)
 
 
 def test_a_member_whose_time_axis_is_lost_is_named_not_misaligned(ens_store):
-    a = _ids(ens_store)[0]
+    a = member_ids(ens_store)[0]
     t = _chunk(ens_store / "members" / a, "t", 0)
     t.unlink()                  # t reads NaN: once "cannot reindex or align along dimension 't'"
     with pytest.raises(StoreError, match=f"member {a} is damaged: {t}: chunk \\(0,\\) of t is missing"):
@@ -477,7 +459,7 @@ def test_a_member_being_rewritten_is_read_whole_by_readers(ens_store, ensemble_r
             seen.append(self.nsnap)
 
     monkeypatch.setattr(SIM.Recorder, "flush", flush)
-    res = _sweep(ens_store, resume=False)
+    res = sweep(ens_store, resume=False)
     assert res.ok and len(res.ran) == 3 and seen
     assert not [p for p in (ens_store / "members").iterdir() if p.name.startswith(".")]   # no leftovers
     assert V.verify(ens_store).ok
