@@ -58,6 +58,7 @@ SLOW = frozenset({
     # rate-and-state runs (a Newton solve per point and step)
     "tests/sequence/test_spring_slider.py::test_the_error_follows_the_tolerance",
     "tests/sequence/test_spring_slider.py::test_the_fully_dynamic_response_is_the_same_ode",
+    "tests/sequence/test_bp1_dynamic.py::test_the_first_event_of_bp1_fd_is_the_same_at_tolerances_1e_5_and_1e_6",
     "tests/sequence/test_sequence_resume.py::test_kill_9_and_resume_of_a_fully_dynamic_sequence_is_bit_identical",
     "tests/scenes/test_tpv6.py::test_the_default_domain_keeps_the_periodic_images_under_half_a_percent",
     "tests/laws/test_rate_state.py::test_psi_is_recorded_by_name_with_its_unit",

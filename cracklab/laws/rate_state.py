@@ -417,7 +417,7 @@ def _chunked(n, chunk, fast, fast_args, slide_args):
 
 
 _HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_fss", "_evolve")
-_PASSES = ("_slide_loop", "_fast_loop", "_rate_loop")
+_PASSES = ("_slide_loop", "_fast_loop", "_rate_loop", "_evolve_loop")
 _KERNEL = []
 #: LLVM vectorises a loop over several arrays only behind run-time checks that they do not
 #: overlap, and by default gives up beyond 8 such checks; numba has no way to declare its
@@ -457,6 +457,17 @@ def _rate_loop(T, psi, sig, eta, a, sa, b, sb, V0, sV0, L, sL, f0, sf0, fw, sfw,
         else:
             dpsi[i] = 0.0
     return -1
+
+
+def _evolve_loop(psi, V, h, a, sa, b, sb, V0, sV0, L, sL, f0, sf0, fw, sfw, Vw, sVw, law, out):
+    """The sequence solvers' state step (:meth:`RateState.evolve_state`): at every point, psi
+    after ``h`` at the constant slip rate V[i] >= 0 (exact, :func:`_evolve`) into ``out``;
+    a parameter x comes with its stride sx (0: one value)."""
+    for i in range(psi.size):
+        ai, bi, Li, V0i, f0i = a[i * sa], b[i * sb], L[i * sL], V0[i * sV0], f0[i * sf0]
+        z = math.exp((psi[i] - f0i) / bi) if law == AGEING else psi[i]
+        z, out[i] = _evolve(law, z, psi[i], V[i], math.nan, ai, 1.0 / ai, bi, h / Li, V0i * h / Li,
+                            math.log(2.0 * V0i), f0i, fw[i * sfw], Vw[i * sVw])
 
 
 def _compile_at(numba):
@@ -777,6 +788,18 @@ hypocentre = [19200.0, 9600.0]
                                   f"{bad}: T = {T[bad]:.6g}, sigma = {flat(sigma)[bad]:.6g}, eta = {eta:.6g}, "
                                   f"psi = {flat(psi)[bad]:.6g}")
         return V, lnV, dpsi
+
+    def evolve_state(self, psi, V, h, at=None):
+        """psi after a step of ``h`` (s) at the constant slip rate ``V`` >= 0 at every point,
+        exactly (the state update of step (v): module docstring), for solvers that integrate
+        psi themselves (cracklab.solver.sequence); ``at`` as in :meth:`slide_rates`. Flat."""
+        psi = np.ascontiguousarray(psi, dtype=float).ravel()
+        V = np.ascontiguousarray(np.broadcast_to(np.asarray(V, dtype=float).ravel(), psi.shape))
+        out = np.empty_like(psi)
+        law = AGEING if self.evolution == "ageing" else STRONG if self.f_w is not None else SLIP
+        _kernel()
+        globals()["_evolve_loop"](psi, V, float(h), *self._points(at, psi.size), law, out)
+        return out
 
     def _points(self, at, n):
         """(array, stride) pairs of a, b, V0, L, f0, f_w, V_w at the ``n`` points ``at`` (a

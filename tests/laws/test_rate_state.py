@@ -250,6 +250,31 @@ def test_the_state_update_is_exact_at_constant_slip_rate(evolution):
         assert math.isfinite(got)
 
 
+@pytest.mark.parametrize("evolution", ["ageing", "slip"])
+def test_the_sequence_state_step_is_the_closed_form_at_each_point_of_field_parameters(evolution):
+    """RateState.evolve_state (the fully dynamic sequences' state step) with a and L fields
+    on a grid and a mask of points: at each point the closed form of the test above."""
+    n = 12
+    a = np.linspace(0.008, 0.02, n)
+    L = np.linspace(0.004, 0.04, n)
+    law = RateState(a=a, b=0.015, L=L, V0=1e-6, f0=0.6, sigma_n=1.0, V_ini=1e-9, evolution=evolution)
+    at = np.arange(n) % 3 != 0
+    psi = np.linspace(0.4, 0.9, at.sum())
+    V = np.logspace(-12, 1, at.sum())
+    got = law.evolve_state(psi, V, 0.37, at=at)
+    for k, (ai, Li, p, v) in enumerate(zip(a[at], L[at], psi, V)):
+        s = v * 0.37 / Li
+        if evolution == "ageing":
+            theta = Li / 1e-6 * math.exp((p - 0.6) / 0.015)
+            theta = theta * math.exp(-s) + Li / v * -math.expm1(-s)
+            want = 0.6 + 0.015 * math.log(1e-6 * theta / Li)
+        else:
+            fss = 0.6 - (0.015 - ai) * math.log(v / 1e-6)
+            psiss = ai * math.log(2e-6 / v * math.sinh(fss / ai))
+            want = psiss + (p - psiss) * math.exp(-s)
+        assert abs(got[k] - want) <= 1e-13 * max(1.0, abs(want)), (k, got[k], want)
+
+
 def test_the_initial_state_from_v_ini_slides_at_v_ini():
     """psi(0) = a ln[(2 V0 / V_ini) sinh((|tau0| - eta V_ini) / (a sigma))], and the first
     step then slides at V_ini (the traction at V_ini is tau0 - eta V_ini)."""

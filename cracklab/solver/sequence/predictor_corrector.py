@@ -5,8 +5,10 @@ of Lapusta et al. (2000), with y = (slip, state) and f = dy/dt = (slip rate, sta
     predict:  y* = y_n + h f_n,              f* = f(t_n + h, y*; history with V(t_n + h) = V_n)
     correct:  y' = y_n + h (f_n + f*) / 2,   f' = f(t_n + h, y'; history with V(t_n + h) = V*)
 
-and the end's slip rate V' = f' is pushed into the history. The error of the step is
-y' - y* = h (f* - f_n) / 2 (Euler against the trapezoid: an embedded pair of order 2),
+for the slip, the state psi exactly at the constant slip rate V_n (predict) and (V_n + V*) / 2
+(correct) by the law's state update (``system.advance``), and the end's slip rate V' = f'
+is pushed into the history. The error of the step is y' - y* (on slip h (f* - f_n) / 2:
+Euler against the trapezoid, an embedded pair of order 2),
 held within the tolerance as the quasi-dynamic pairs are (integrate.py); but no step is
 shorter than ``control.dt_min``, the dynamic step beta dx / c_s: a step there is taken
 whatever its estimate, as the fixed-step ruptures are (it is their step)."""
@@ -60,14 +62,14 @@ def _try(system, t, y, f, h):
     system.response.prepare(h)
     try:
         system.v_end = system.rate_fields(f)
-        y_p = y + h * f
+        y_p = system.advance(y, f, f, h)
         f_p = system.rates(t + h, y_p)
-        y_c = y + 0.5 * h * (f + f_p)
+        y_c = system.advance(y, f, f_p, h)
         system.v_end = system.rate_fields(f_p)
         f_c = system.rates(t + h, y_c)
     except (SimulationError, FloatingPointError):
         return y, f, np.full_like(y, np.nan), False
-    return y_c, f_c, 0.5 * h * (f_p - f), bool(np.all(np.isfinite(y_c)) and np.all(np.isfinite(f_c)))
+    return y_c, f_c, y_c - y_p, bool(np.all(np.isfinite(y_c)) and np.all(np.isfinite(f_c)))
 
 
 def _failure(system, t, h, y_new, f_new) -> str:
