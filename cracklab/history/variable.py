@@ -43,6 +43,8 @@ __all__ = ["NearTable", "VariableHistory", "T0_VARIABLE", "memory"]
 
 #: the start of the fitted tail in u = q c_s (t - s)
 T0_VARIABLE = 4.0
+#: -Re z beyond which e^z (below 2e-22) is left out of a sum of terms of order one
+NEGLIGIBLE = 50.0
 #: panels of [0, T0] and the degree of their Chebyshev series of Z
 _PANELS = 16
 _DEGREE = 24
@@ -238,6 +240,8 @@ def _p(p0, p00, half, u):
 @njit()
 def _phi(z):
     """((e^z - 1)/z, (e^z (z - 1) + 1)/z^2): int_0^1 e^{z v} dv and int_0^1 v e^{z v} dv."""
+    if z.real < -NEGLIGIBLE:                # e^z below 2e-22: its terms are below the last bit
+        return -1.0 / z, 1.0 / (z * z)
     if abs(z) < 1e-3:
         z2 = z * z
         return (1.0 + z / 2.0 + z2 / 6.0 + z2 * z / 24.0 + z2 * z2 / 120.0,
@@ -265,9 +269,9 @@ def _near(p0, p00, half, T0, ua, ub):
 
 
 @njit()
-def _slab(lam, ua, ub, lo, hi, rk, ea, eb):
+def _slab(lam, elo, ua, ub, lo, hi, rk, ea, eb):
     """ea_p, eb_p: int e^{lam_p u} (u - u_b)/d du / r and int e^{lam_p u} (u_a - u)/d du / r
-    over the part of the piece in [lo, hi]."""
+    over the part of the piece in [lo, hi] (elo_p = e^{lam_p lo})."""
     d = ua - ub
     x = ub if ub > lo else lo
     y = ua if ua < hi else hi
@@ -275,8 +279,16 @@ def _slab(lam, ua, ub, lo, hi, rk, ea, eb):
     ca = (x - ub) / d                        # the weight of Va at x
     cb = (ua - x) / d
     for p in range(lam.size):
+        z = lam[p] * x
+        if x == lo:
+            ex = elo[p] * L / rk
+        elif z.real < -NEGLIGIBLE:
+            ea[p] = 0.0
+            eb[p] = 0.0
+            continue
+        else:
+            ex = np.exp(z) * L / rk
         f1, f2 = _phi(lam[p] * L)
-        ex = np.exp(lam[p] * x) * L / rk
         ea[p] = ex * (ca * f1 + (L / d) * f2)
         eb[p] = ex * (cb * f1 - (L / d) * f2)
 
@@ -286,6 +298,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
              cached, run, cL, cw, cwo, ce0, cs, cg):
     M = r.size
     P = lam.size
+    elo = np.exp(lam * T0)
     ea = np.empty(P, dtype=np.complex128)
     eb = np.empty(P, dtype=np.complex128)
     for k in range(M):
@@ -318,7 +331,8 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
             lo = T0
             hi = T0 + rk * h
             for p in range(P):
-                g = np.exp(lam[p] * rk * h)
+                z = lam[p] * (rk * h)
+                g = 0.0 if z.real < -NEGLIGIBLE else np.exp(z)
                 kR[k, p] = g * SR[k, p]
                 kI[k, p] = g * SI[k, p]
                 sB[k, p] = 0.0
@@ -335,7 +349,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                     if j == n:
                         bk += wb / rk
                 if ua > lo and ub < hi:                        # the slab that crossed u = T0
-                    _slab(lam, ua, ub, lo, hi, rk, ea, eb)
+                    _slab(lam, elo, ua, ub, lo, hi, rk, ea, eb)
                     for p in range(P):
                         kR[k, p] += ea[p] * Va.real + eb[p] * Vb.real
                         kI[k, p] += ea[p] * Va.imag + eb[p] * Vb.imag
@@ -377,6 +391,7 @@ def _uniform_weights(r, lam, p0, p00, half, T0, h, cL, cw, cwo, ce0, cs, cg):
     P = lam.size
     ea = np.empty(P, dtype=np.complex128)
     eb = np.empty(P, dtype=np.complex128)
+    elo = np.exp(lam * T0)
     for k in range(r.size):
         rk = r[k]
         lo = T0
@@ -399,7 +414,7 @@ def _uniform_weights(r, lam, p0, p00, half, T0, h, cL, cw, cwo, ce0, cs, cg):
             if ua > lo and ub < hi:
                 if ce0[k] < 0:
                     ce0[k] = lag
-                _slab(lam, ua, ub, lo, hi, rk, ea, eb)
+                _slab(lam, elo, ua, ub, lo, hi, rk, ea, eb)
                 for p in range(P):
                     cs[k, lag + 1 - ce0[k], p] += ea[p]
                     cs[k, lag - ce0[k], p] += eb[p]
