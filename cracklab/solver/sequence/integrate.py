@@ -54,12 +54,12 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
     them).
     A step that misses the tolerance at ``control.dt_min`` raises SimulationError naming
     the time, the unknown and its values."""
-    A = [np.asarray(row, dtype=float) for row in pair.a]
+    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
     b, e = np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
     t, y = float(t0), np.array(y0, dtype=float)
     h = float(dt or control.dt_first)
-    k = [None] * pair.stages
-    k[0] = system.rates(t, y) if rates is None else np.array(rates, dtype=float)
+    k = np.empty((pair.stages, y.size))     # the stages' rates, a row each: a stage's sum is one product
+    k[0] = system.rates(t, y) if rates is None else np.asarray(rates, dtype=float)
     n = n0
     while t < t_end:
         rejected, split = 0, False
@@ -82,7 +82,7 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
         else:
             k[0] = system.rates(t, y)
         n += 1
-        yield Accepted(n, t, y, step, h_next, rejected, k[0])
+        yield Accepted(n, t, y, step, h_next, rejected, k[0].copy())
         h = h_next
 
 
@@ -90,13 +90,10 @@ def _try(system, pair, A, b, e, k, t, y, h):
     """(y_new, error estimate, whether every stage gave finite rates) of one step of ``h``."""
     try:
         for i in range(1, pair.stages):
-            yi = y + h * sum(A[i][j] * k[j] for j in range(i) if A[i][j] != 0.0)
+            yi = y + h * (A[i] @ k[:i])
             k[i] = system.rates(t + pair.c[i] * h, yi)
-        if pair.fsal:
-            y_new = yi
-        else:
-            y_new = y + h * sum(b[j] * k[j] for j in range(pair.stages) if b[j] != 0.0)
-        err = h * sum(e[j] * k[j] for j in range(pair.stages) if e[j] != 0.0)
+        y_new = yi if pair.fsal else y + h * (b @ k)
+        err = h * (e @ k)
     except (SimulationError, FloatingPointError):
         return y, np.full_like(y, np.nan), False
     return y_new, err, bool(np.all(np.isfinite(y_new)))

@@ -1,0 +1,94 @@
+"""What a quasi-dynamic BP1 step costs, by part, and what bounds a 1500-year run
+(docs/studies/cycles.md, "Cost against the targets").
+
+    python -m studies.cycles.cost --dz 25 [--steps 300000]
+
+Times, at the state a short run reaches, one evaluation of the rates (the step's unit:
+Dormand-Prince 5(4) takes six per accepted step) and its parts: the transforms of the
+static response, the rate-and-state solve at the sliding points, the rest (glue); and the
+step's own arithmetic (the pair's stage sums, its error estimate and norm). Then the
+floor of a run of ``--steps`` accepted steps (the count of the study's run at that dz)
+if the glue and the step's own arithmetic cost nothing."""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+import numpy as np
+
+
+def _best(fn, repeats):
+    """The best of ``repeats`` timings of fn(), in seconds (the machine is shared)."""
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def breakdown(dz, years=2.0, repeats=200) -> dict:
+    """{part: seconds} of one rate evaluation of BP1-QD at ``dz`` (after ``years`` of a run)."""
+    from cracklab.scenes import bp1
+    from cracklab.solver.sequence.run import system_of
+
+    scene = bp1(dz=dz, years=years)
+    system = system_of(scene)
+    y = system.initial()
+    f = system.rates(0.0, y)
+    y = y + 3.15e7 * f                       # a year on: the state of a slow phase
+    system.rates(3.15e7, y)
+    delta, psi = system.split(y)
+    shape = system.grid.shape
+    fields = {c: delta[c].reshape(shape) for c in system.comps}
+    s = system.slides
+    T = np.abs(system.traction(3.15e7, y)[system.comps[0]][s])
+    law = system.law
+    rates = _best(lambda: system.rates(3.15e7, y), repeats)
+    transforms = _best(lambda: system.static.traction(fields), repeats)
+    solve = _best(lambda: law.slide_rates(T, psi[s], system.sigma_s, system.eta, guess=system.lnV, at=s), repeats)
+    step = _step(scene, system, y, repeats)
+    return {"dz": dz, "nodes": int(system.n), "sliding_points": int(s.sum()), "rates_s": rates,
+            "transforms_s": transforms, "solve_s": solve, "glue_s": rates - transforms - solve,
+            "step_own_s": step, "step_s": 6 * rates + step}
+
+
+def _step(scene, system, y, repeats):
+    """Seconds of an accepted step's own arithmetic, without its six evaluations: the
+    pair's stage sums and error estimate (integrate._try, with rates that cost nothing)
+    and the error's norm (integrate.error_norm)."""
+    from types import SimpleNamespace
+
+    from cracklab.solver.sequence.integrate import _try, error_norm
+    from cracklab.solver.sequence.pairs import PAIRS
+
+    pair = PAIRS[scene.sequence.pair]
+    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
+    b, e = np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+    f = system.rates(3.15e7, y)
+    k = np.empty((pair.stages, y.size))
+    k[0] = f
+    free = SimpleNamespace(rates=lambda t, yi: f)
+    sums = _best(lambda: _try(free, pair, A, b, e, k, 3.15e7, y, 1.0), repeats)
+    y_new, err, _ = _try(free, pair, A, b, e, k, 3.15e7, y, 1.0)
+    norm = _best(lambda: error_norm(system, y_new, err, scene.sequence.tolerance), repeats)
+    return sums + norm
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--dz", type=float, default=25.0)
+    p.add_argument("--steps", type=int, default=None, help="accepted steps of the run to bound")
+    args = p.parse_args(argv)
+    b = breakdown(args.dz)
+    floor = 6 * (b["transforms_s"] + b["solve_s"])
+    b["step_floor_s"] = floor
+    if args.steps:
+        b.update({"steps": args.steps, "run_s": args.steps * b["step_s"], "run_floor_s": args.steps * floor})
+    print(json.dumps(b, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
