@@ -46,9 +46,10 @@ def _refuse_damaged(store):
     """Raise a StoreError naming ``store`` and the remedy when its listing shows damage (a missing
     chunk or array would be drawn as a blank picture), as ``cracklab export`` does."""
     from ..errors import StoreError
+    from ..output.stores import is_url
     from ..output.verify import check_run
 
-    if "://" in store:
+    if is_url(store):
         return
     report = check_run(store, read=False)
     if not report.ok:

@@ -156,10 +156,10 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
     typed = click.get_current_context().get_parameter_source
     done, first = False, 0
     if path is None:            # a URL: simulate writes it, but checkpoints only into a local path
-        from ..output.objectstore import check_url
+        from ..output.stores import store_for
 
         try:
-            check_url(output)   # its scheme, credentials and bucket, before the note and any step
+            store_for(output).check()   # its scheme, credentials and bucket, before the note and any step
         except StoreError as exc:
             raise fail(exc) from None
         if typed("resume") == click.core.ParameterSource.COMMANDLINE and resume:

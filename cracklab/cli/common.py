@@ -94,10 +94,11 @@ def disk_line(estimate, output, what: str = "the run", reuse: bool = True, label
     ``output``: the store (None: the current directory); ``label``: what writes it."""
     from ..errors import DiskBudgetError
     from ..output import disk
+    from ..output.stores import is_url
     from ..solver.budget import fmt_bytes
 
     head = f"  disk      {label} {estimate.describe()}; "
-    if output is not None and "://" in str(output):
+    if output is not None and is_url(output):
         return head + f"{output} is a URL: free space not checked", True
     where = output if output is not None else "."
     where_text = f"free where {output} goes" if output is not None else "free in the current directory (no -o)"

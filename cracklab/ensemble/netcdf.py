@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, StoreError
+from ..output.stores import is_url
 
 
 def _nc_attr(value):
@@ -187,7 +188,7 @@ def _read_error(store, exc) -> StoreError:
     for an error met while reading its data."""
     from .store import error_line
 
-    if "://" not in store:
+    if not is_url(store):
         from .verify import verify
 
         with contextlib.suppress(Exception):
@@ -266,7 +267,7 @@ def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=Tru
     else:
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
-        if "://" not in store:
+        if not is_url(store):
             from ..output.verify import check_run
 
             report = check_run(store, read=False)
@@ -276,7 +277,7 @@ def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=Tru
             ds = xr.open_zarr(store, consolidated=False)
         except (ValueError, KeyError, OSError) as exc:
             raise _read_error(store, exc) from None
-        if "://" not in store:
+        if not is_url(store):
             ds, _ = _trimmed(ds, store, allow_partial, f"the run in {store}")
     ds = netcdf_ready(ds)
     out = Path(out)

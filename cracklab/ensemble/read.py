@@ -11,6 +11,7 @@ import numpy as np
 from ..errors import InputError, StoreError
 from .identity import FORMAT, canonical_json, coordinate_name
 from .store import MEMBERS, check_metadata, error_line, member_attrs, open_group, store_kind, store_str
+from ..output.stores import is_url
 
 
 def member_status(store) -> list[dict]:
@@ -21,7 +22,7 @@ def member_status(store) -> list[dict]:
         raise InputError("store", f"{store} is not a cracklab ensemble store (it is a single run)")
     root = open_group(store, "r")
     ids = list(root.attrs.get("members", []))
-    local = "://" not in store
+    local = not is_url(store)
     if local:
         check_metadata(store, Path(store) / MEMBERS / "zarr.json",
                         "rerun the sweep (cracklab sweep STUDY.toml -o STORE) to repair it")
@@ -63,7 +64,7 @@ def _member_damage(store, mid):
     """None, or a StoreError for the complete member ``mid`` whose metadata or chunk
     listing is damaged, or whose metadata does not match what is stored (cheap: no data is
     read but the scene's inputs; a changed byte raises when read)."""
-    if "://" in store:
+    if is_url(store):
         return None
     from .checks import check_member
 
@@ -80,7 +81,7 @@ def open_member(store, member: str):
 
     store = store_str(store)
     attrs = member_attrs(store, member)
-    if attrs is None and "://" not in store and (Path(store) / MEMBERS / member / "zarr.json").exists():
+    if attrs is None and not is_url(store) and (Path(store) / MEMBERS / member / "zarr.json").exists():
         check_metadata(store, Path(store) / MEMBERS / member / "zarr.json",
                         "rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the member")
     if attrs is not None and attrs.get("complete") is True:

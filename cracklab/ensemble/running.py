@@ -21,6 +21,7 @@ from .store import (MEMBERS, SWAP_TAG, check_store, damage_of, error_line, init_
                     member_attrs, member_path, open_group, record_failure, store_str, swap_in,
                     traceback_summary)
 from .members_table import write_member_table
+from ..output.stores import is_url
 
 
 def cores() -> int:
@@ -237,7 +238,7 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     outputs = {}
     estimates = preflight(base_scene, members, fft_threads=fft_threads, sweep=sweep, outputs=outputs)
     todo = [m for m in members if replace or not resume or not is_complete(store, m.id)]
-    if check_disk and todo and "://" not in store:
+    if check_disk and todo and not is_url(store):
         _check_sweep_disk(store, [outputs[m.id] for m in todo if m.id in outputs], len(todo))
     synchronous = client is None and scheduler == "synchronous"
     address = None if client is not None or synchronous else (scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS"))
@@ -328,7 +329,7 @@ def _check_same_study(store: str, spec: dict, overwrite: bool) -> bool:
         raise InputError("store", f"{store} holds the ensemble of another study ({name!r}: "
                                   f"{_identity(old)[1] or 'a base scene'}); refusing to mix or replace it: choose "
                                   f"another output path, or --overwrite (ensemble.run(overwrite=True)) to replace it")
-    if "://" in store:
+    if is_url(store):
         raise InputError("store", f"{store}: --overwrite replaces local stores only; delete it first")
     return True
 
@@ -491,7 +492,7 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, 
 
         old = member_attrs(store, member.id)
         if old is not None and old.get("complete") is True:
-            if "://" in store:      # no rename: mark it incomplete before any array is touched
+            if is_url(store):      # no rename: mark it incomplete before any array is touched
                 open_group(path, "a").update_attributes({"complete": False, "status": "running"})
             else:
                 target = f"{store_str(store)}/{MEMBERS}/.{member.id}{SWAP_TAG}{os.urandom(4).hex()}"

@@ -12,7 +12,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import InputError, StoreError
-from ..output.objectstore import check_url, is_url
+from ..output.stores import is_url, store_for
 from .identity import FORMAT, canonical_json
 from .lock import LOCK_NAME
 from .spec import Member
@@ -24,7 +24,7 @@ def store_str(store) -> str:
     """A store path as the text used everywhere: a URL as given (no trailing /), a local
     path absolute."""
     s = os.fspath(store)
-    if "://" in s:
+    if is_url(s):
         return s.rstrip("/")
     return str(Path(s).expanduser().resolve())
 
@@ -71,9 +71,9 @@ def store_kind(store) -> str:
     anything else (no such path, a file, a directory or Zarr group that cracklab did
     not write, an ensemble store of a newer format)."""
     s = store_str(store)
-    if "://" not in s and not Path(s).exists():
+    if not is_url(s) and not Path(s).exists():
         raise InputError("store", f"{s} does not exist")
-    check_metadata(s, Path(s) / "zarr.json" if "://" not in s else None,
+    check_metadata(s, Path(s) / "zarr.json" if not is_url(s) else None,
                     "restore it, or delete the store and run it again")
     try:
         root = open_group(s, "r")
@@ -110,11 +110,11 @@ def check_store(store: str):
     store: a file, a non-empty directory that is not a Zarr group, a Zarr group that is
     not an ensemble (e.g. a single run), or a store of a newer ensemble format; a URL
     whose scheme has no store, whose credentials are missing or whose bucket does not
-    exist (StoreError, ``cracklab.output.objectstore.check_url``)."""
+    exist (StoreError, ``Store.check``)."""
     import zarr
 
     if is_url(store):
-        check_url(store)            # its scheme, credentials and bucket
+        store_for(store).check()    # its scheme, credentials and bucket
     else:
         p = Path(store)
         if p.exists() and not p.is_dir():
@@ -124,7 +124,7 @@ def check_store(store: str):
     except Exception:  # noqa: BLE001 - no group there (yet)
         root = None
     if root is None:
-        if "://" not in store and Path(store).is_dir() and any(
+        if not is_url(store) and Path(store).is_dir() and any(
                 n != LOCK_NAME for n in os.listdir(store)):
             raise InputError("store", f"{store} is a directory with other content, not a Zarr store; "
                                       f"choose another path")
@@ -154,7 +154,7 @@ def init_store(store: str, study_spec: dict, members: list[Member], axes=()):
         "members": ids,
         "axes": json.dumps(list(axes)),
     })
-    if "://" not in store:
+    if not is_url(store):
         from ..output.verify import read_json
 
         meta = Path(store) / MEMBERS / "zarr.json"
@@ -188,7 +188,7 @@ def damage_of(store, member: Member):
     metadata and parameters against what is stored: ``checks.check_member``); else a line
     naming the damage, after marking the member damaged and incomplete (so that no reader
     takes it, and the sweep runs it again)."""
-    if "://" in store:
+    if is_url(store):
         return None             # only local stores are verified
     from .checks import check_member
 

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import StoreError
+from .stores.base import is_url
 
 RUN_FORMAT = 1          # attr ``cracklab_run_format`` of a run store
 CHECKPOINT_FORMAT = 1   # layout of the checkpoint file
@@ -167,7 +168,7 @@ def local_path(store):
     """The filesystem path of ``store`` (None for Zarr store objects and URLs)."""
     if isinstance(store, (str, os.PathLike)):
         s = os.fspath(store)
-        if "://" not in s:
+        if not is_url(s):
             return Path(s).expanduser()
     return None
 

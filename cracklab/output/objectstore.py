@@ -11,19 +11,10 @@ from __future__ import annotations
 import os
 
 from ..errors import StoreError
+from .stores.base import is_url, scheme  # noqa: F401  (objectstore.is_url as before)
 
 # schemes whose first path part is a bucket (or container) that must exist
 BUCKETS = {"s3", "s3a", "gs", "gcs", "az", "abfs", "abfss"}
-SUPPORTED = "local paths and fsspec URLs (s3://, gs://, az://, memory://, ...)"
-
-
-def is_url(store) -> bool:
-    """True for a store given as a URL (text with ``://``)."""
-    return isinstance(store, (str, os.PathLike)) and "://" in os.fspath(store)
-
-
-def scheme(url: str) -> str:
-    return url.split("://", 1)[0].lower()
 
 
 def endpoint(url: str) -> str:
@@ -36,17 +27,16 @@ def endpoint(url: str) -> str:
 
 def filesystem(url: str):
     """(fsspec filesystem, path) of ``url``: a fresh instance, so that the credentials are
-    those of the environment now (fsspec caches instances). StoreError for a scheme with
-    no store implementation or whose package is not installed."""
+    those of the environment now (fsspec caches instances). StoreError for a scheme fsspec
+    does not know or whose package is not installed."""
     import fsspec
     from fsspec.core import url_to_fs
 
     s = scheme(url)
     try:
         fsspec.get_filesystem_class(s)
-    except ValueError:
-        raise StoreError(url, f"no store for the scheme '{s}://': cracklab writes to {SUPPORTED}; check the "
-                              f"URL") from None
+    except ValueError:      # cracklab.output.stores.store_for names the schemes a store takes
+        raise StoreError(url, f"no fsspec implementation for the scheme '{s}://'; check the URL") from None
     except ImportError as exc:
         raise StoreError(url, f"the scheme '{s}://' needs a package that is not installed ({exc})") from None
     return url_to_fs(url, skip_instance_cache=True)

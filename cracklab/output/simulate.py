@@ -144,7 +144,7 @@ class Recorder:
             import zarr
 
             def fresh():
-                zarr.open_group(str(self.path), mode="w").update_attributes(ds.attrs)
+                zarr.open_group(self.store, mode="w").update_attributes(ds.attrs)
                 ds.to_zarr(self.store, mode="a", consolidated=False, compute=False, write_empty_chunks=True,
                            encoding=checkpoint.encoding(ds))
 
@@ -196,7 +196,7 @@ class Recorder:
             # kill between the two left the new step with the previous snapshot count)
             import zarr
 
-            zarr.open_group(str(self.path), mode="a").update_attributes(
+            zarr.open_group(self.store, mode="a").update_attributes(
                 {"cracklab_checkpoint_step": n, "cracklab_checkpoint_snapshots": self.nsnap})
         except OSError as exc:
             raise checkpoint.store_error(self.path, exc, f"recording the checkpoint after step {n}") from None
@@ -208,7 +208,7 @@ class Recorder:
         import zarr
 
         self._store_op("preparing the store to resume",
-                       lambda: zarr.open_group(str(self.path), mode="a").update_attributes({"cracklab_status": "running"}))
+                       lambda: zarr.open_group(self.store, mode="a").update_attributes({"cracklab_status": "running"}))
         self._store_op("preparing the store to resume", checkpoint.prepare_resume, self.path, self.snapshot_times())
         self.written = True
         self.nsnap = int(ck["nsnap"])
@@ -244,7 +244,7 @@ class Recorder:
                                self.store, self.nsnap)
             import zarr
 
-            group = zarr.open_group(str(self.path) if self.path is not None else self.store, mode="a")
+            group = zarr.open_group(self.store, mode="a")
             extra.attrs = dict(group.attrs)       # as they are: the status comes last, below
             self._store_op("writing the station series and rupture times", extra.to_zarr, self.store,
                            mode="a", consolidated=False, write_empty_chunks=True,
@@ -259,8 +259,7 @@ class Recorder:
                 checkpoint.remove(self.path)
             # then its consolidated metadata, where xarray.open_zarr looks first (no warning):
             # of what is there, the checkpoint gone
-            self._store_op("consolidating the store's metadata", _consolidate,
-                           str(self.path) if self.path is not None else self.store)
+            self._store_op("consolidating the store's metadata", _consolidate, self.store)
             return xr.open_zarr(self.store, consolidated=False)
         for name, arr in self.inputs.items():
             extra[name] = (("input_x1", "input_x3"), np.asarray(arr), input_attrs(scene, name))
@@ -333,7 +332,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     (``cracklab.output.verify``). A damaged store is not served: a complete one, or one damaged
     before its checkpoint, is run again from the start (with a ``StoreWarning`` naming
     the damaged files). Store problems raise StoreError; a store given as a URL is checked
-    before any step (``objectstore.check_url``: its scheme, credentials and bucket).
+    before any step (``Store.check``: its scheme, credentials and bucket).
 
     ``check_memory``: estimate the run's memory first (``cracklab.solver.budget``) and raise
     ``MemoryBudgetError`` before any step when it exceeds the memory available.
@@ -343,10 +342,15 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     during a run into a local store stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
-    from .objectstore import check_url, is_url
+    import os
 
-    if is_url(store):                   # its scheme, credentials and bucket, before any step
-        check_url(str(store))
+    from .stores import store_for
+
+    # the kind of storage, from the path or URL; a URL's scheme, credentials and bucket
+    # are checked before any step
+    target = store_for(store) if isinstance(store, (str, os.PathLike)) else None
+    if target is not None:
+        target.check()
     if scene.sequence is not None:      # a sequence of earthquakes: the adaptive step (output/sequence.py)
         from .sequence import run_sequence
 
@@ -354,7 +358,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
                             checkpoint_every=checkpoint_every)
     every_n, every_s = checkpoint_policy(checkpoint_every)
     adaptive = checkpoint_every is None     # the default: keep checkpoints under 10 % of the time
-    path = checkpoint.local_path(store) if store is not None else None
+    path = target.path if target is not None else None
     if resume and path is None:
         raise InputError("resume", "needs a store path (a local Zarr directory) to resume from")
     if check_memory:
@@ -368,7 +372,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
               hint="record fewer fields, less often (record.every, record.times) or on a region "
                    "(record.region), or write to a larger disk; or run it anyway with check_disk=False "
                    "(cracklab run --no-disk-check)")
-    rec = Recorder(scene, store, path)
+    rec = Recorder(scene, target.zarr_store() if target is not None else store, path)
     start, last = None, -1
     if path is not None:
         if resume:

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import StoreWarning
 from .checkpoint import is_final_array, scene_digest
-from .objectstore import is_url
+from .stores import is_url
 
 CHECKSUM_CODEC = "crc32c"
 SCENE_CHANGED = "the run's scene"      # how a scene that is not the run's own is named
@@ -568,13 +568,14 @@ def check_ensemble(store, *, read: bool = True) -> Report:
 def verify(store, *, read: bool = True) -> Report:
     """The ``Report`` of a run or ensemble store: a local path, or the URL of a run's
     store (``s3://bucket/run.zarr``; its keys listed once, every chunk read over the
-    network; checked first by ``objectstore.check_url``)."""
+    network; checked first by its ``Store.check``)."""
     from ..errors import StoreError
-    from .objectstore import StoredTree, check_url
+    from .objectstore import StoredTree
+    from .stores import store_for
 
     if is_url(store):
         url = os.fspath(store).rstrip("/")
-        p = StoredTree(*check_url(url, exists=True), url)
+        p = StoredTree(*store_for(url).check(exists=True), url)
     else:
         p = Path(os.fspath(store)).expanduser()
         if not p.is_dir():

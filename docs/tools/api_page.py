@@ -58,7 +58,8 @@ def groups() -> list[tuple[str, str, list[str]]]:
             "cracklab.kernels.C_I", "cracklab.kernels.C_II", "cracklab.kernels.C_III", "cracklab.kernels.Z"]),
         ("Output", "`cracklab.output`", [
             "cracklab.simulate", "cracklab.stations", "cracklab.scene_of", "cracklab.SimulationError",
-            "cracklab.output.seas.export_seas"]),
+            "cracklab.output.seas.export_seas", "cracklab.output.stores.Store", "cracklab.output.stores.store_for",
+            "cracklab.output.stores.kinds"]),
         ("Ensemble", "`cracklab.ensemble`", [
             "cracklab.open_ensemble", "cracklab.register_builder", "cracklab.ensemble.run",
             "cracklab.ensemble.load_study", "cracklab.ensemble.plan", "cracklab.ensemble.open_member",

@@ -137,22 +137,22 @@ def test_a_read_only_location(tmp_path):
 # ---------------------------------------------------------------------------- full disk
 @pytest.fixture
 def disk_fills_at_step(monkeypatch):
-    """Every Zarr write fails with ENOSPC once the run has passed step ``armed["step"]``."""
-    import zarr.storage._local as local
+    """Every write of a local store (LocalStore.write) fails with ENOSPC once the run has passed step ``armed["step"]``."""
+    from cracklab.output.stores import LocalStore
 
     armed = {"step": None, "now": -1}
-    real_put, real_call = local._put, SIM.Recorder.__call__
+    real_put, real_call = LocalStore.write, SIM.Recorder.__call__
 
-    def put(path, value, exclusive=False):
+    def put(self, path, value, exclusive=False):
         if armed["step"] is not None and armed["now"] >= armed["step"]:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
-        return real_put(path, value, exclusive)
+        return real_put(self, path, value, exclusive)
 
     def call(self, state):
         armed["now"] = state.n
         real_call(self, state)
 
-    monkeypatch.setattr(local, "_put", put)
+    monkeypatch.setattr(LocalStore, "write", put)
     monkeypatch.setattr(SIM.Recorder, "__call__", call)
     return armed
 

@@ -214,21 +214,21 @@ def test_export_of_a_damaged_run_names_the_file(run_store, tmp_path):
 
 # ---------------------------------------------------------------------------- status last
 def test_the_status_is_written_after_every_array(tmp_path, monkeypatch):
-    import zarr.storage._local as local
+    from cracklab.output.stores import LocalStore
 
     writes = []
-    real = local._put
+    real = LocalStore.write
 
-    def put(path, value, exclusive=False):
+    def put(self, path, value, exclusive=False):
         path = Path(path)
         status = None
         if path.name == "zarr.json" and path.parent == store:
             status = json.loads(bytes(value.as_buffer_like()))["attributes"].get("cracklab_status")
         writes.append((path, status))
-        return real(path, value, exclusive)
+        return real(self, path, value, exclusive)
 
     store = tmp_path / "run.zarr"
-    monkeypatch.setattr(local, "_put", put)
+    monkeypatch.setattr(LocalStore, "write", put)
     cracklab.simulate(_scene(), store=store)
     done = [i for i, (_, s) in enumerate(writes) if s == "complete"]
     assert done, "the status was never written"
@@ -240,27 +240,27 @@ def test_the_status_is_written_after_every_array(tmp_path, monkeypatch):
 
 KILLER = r"""
 import os, signal, sys
-import zarr.storage._local as local
 import importlib
+from cracklab.output.stores import LocalStore
 from cracklab import cli
 S = importlib.import_module("cracklab.output.simulate")
 
 state = {"armed": False, "n": 0}
-real_finish, real_put = S.Recorder.finish, local._put
+real_finish, real_put = S.Recorder.finish, LocalStore.write
 after = int(os.environ["KILL_AFTER"])
 
 def finish(self, *a, **k):
     state["armed"] = True
     return real_finish(self, *a, **k)
 
-def put(path, value, exclusive=False):
+def put(self, path, value, exclusive=False):
     if state["armed"] and "/station_" in str(path) and str(path).endswith("zarr.json") is False:
         state["n"] += 1
         if state["n"] > after:
             os.kill(os.getpid(), signal.SIGKILL)      # kill -9 in the middle of the final write
-    return real_put(path, value, exclusive)
+    return real_put(self, path, value, exclusive)
 
-S.Recorder.finish, local._put = finish, put
+S.Recorder.finish, LocalStore.write = finish, put
 sys.argv = ["cracklab"] + sys.argv[1:]
 cli.main()
 """
@@ -311,9 +311,9 @@ def test_kill_during_the_final_write_leaves_a_store_not_complete(checkpoints, tm
 def test_a_full_disk_during_the_final_write_leaves_a_store_not_complete(tmp_path, monkeypatch, reference):
     import errno
 
-    import zarr.storage._local as local
+    from cracklab.output.stores import LocalStore
 
-    real = local._put
+    real = LocalStore.write
     state = {"finishing": False, "n": 0}
     real_finish = SIM.Recorder.finish
 
@@ -321,16 +321,16 @@ def test_a_full_disk_during_the_final_write_leaves_a_store_not_complete(tmp_path
         state["finishing"] = True
         return real_finish(self, *a, **k)
 
-    def put(path, value, exclusive=False):
+    def put(self, path, value, exclusive=False):
         if state["finishing"] and "/station_" in str(path):
             state["n"] += 1
             if state["n"] > 3:
                 raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
-        return real(path, value, exclusive)
+        return real(self, path, value, exclusive)
 
     store = tmp_path / "run.zarr"
     monkeypatch.setattr(SIM.Recorder, "finish", finish)
-    monkeypatch.setattr(local, "_put", put)
+    monkeypatch.setattr(LocalStore, "write", put)
     with pytest.raises(StoreError, match="no space left on device while writing the station series"):
         cracklab.simulate(_scene(), store=store, checkpoint_every=10)
     monkeypatch.undo()                                       # space was freed

@@ -1,0 +1,71 @@
+"""The store protocol: what cracklab asks of the storage a run or an ensemble is written to.
+
+A ``Store`` is one place (a local path or a URL) on one kind of storage. It checks the
+place before anything runs (``check``), gives zarr the store object every write of a run
+goes through (``zarr_store``: one seam, where a test injects a fault), and holds a
+sweep's exclusive use of the place (``lock``). Each kind of storage is one subclass in a
+file of its own, chosen from the path or URL by ``cracklab.output.stores.store_for``."""
+from __future__ import annotations
+
+import contextlib
+import os
+from abc import ABC, abstractmethod
+from pathlib import Path
+from typing import ClassVar
+
+
+def is_url(store) -> bool:
+    """True for a store given as a URL (text with ``://``); the one test of it."""
+    return isinstance(store, (str, os.PathLike)) and "://" in os.fspath(store)
+
+
+def scheme(target) -> str:
+    """The scheme of a URL in lower case (``"s3"``); ``""`` for a local path."""
+    s = os.fspath(target)
+    return s.split("://", 1)[0].lower() if is_url(s) else ""
+
+
+class Store(ABC):
+    """A run's or an ensemble's storage at ``target`` (a local path or a URL, as given).
+
+    ``kind``: the name it is registered under; ``local``: True when the store is a
+    directory of the local file system (``path``), where checkpoints, the disk check and
+    the atomic rename of a member live; ``accepts``: what it accepts, for messages."""
+
+    kind: ClassVar[str]
+    local: ClassVar[bool] = False
+    accepts: ClassVar[str] = ""
+
+    def __init__(self, target):
+        self.target = os.fspath(target)
+
+    def __str__(self) -> str:
+        return self.target
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.target!r})"
+
+    @classmethod
+    @abstractmethod
+    def handles(cls, scheme: str) -> bool:
+        """True when this kind of storage takes targets of ``scheme`` (``""``: a path)."""
+
+    @property
+    def path(self) -> Path | None:
+        """The local directory of the store (None for a store that is not local)."""
+        return None
+
+    @abstractmethod
+    def check(self, *, exists: bool = False) -> None:
+        """Raise one StoreError naming the store when it cannot be used (and, with
+        ``exists``, when no Zarr store is there), before anything is written."""
+
+    @abstractmethod
+    def zarr_store(self):
+        """What zarr and xarray are given to read and write the store: every write of a
+        run goes through it."""
+
+    def lock(self):
+        """A context holding this store for one sweep at a time; yields what holds it
+        (None: this kind of storage is not locked)."""
+        return contextlib.nullcontext()
