@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError, check_positive
-from .common import check_stations, spacing_grid
 from ..laws import RateState
 from ..model.grid import Grid, accepted_size
 from ..model.loading import Loading
@@ -16,6 +15,7 @@ from ..model.material import Material
 from ..model.record import Record
 from ..model.scene import Scene
 from ..model.sequence import Sequence
+from .common import check_stations, spacing_grid
 
 YEAR = 365.0 * 24.0 * 3600.0     # s, as SEAS counts years
 
@@ -119,7 +119,9 @@ def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, dep
 #: V_init, V0, f0; the fault's zones h_s (shallow velocity strengthening), h_t (transition), H
 #: and l (the uniform velocity-weakening patch's width and length), W_f and l_f (the
 #: rate-and-state fault's width and length), w (the nucleation zone's side), its initial slip
-#: rate V_i, and the duration t_f (years)
+#: rate V_i, and the duration t_f (years). The description's text past its first page was not
+#: at hand: the nucleation zone's place, D_c_nuc and V_i are those of its authors' set-ups
+#: (Thrase's BP5-QD; tandem's BP5 takes V_i = 0.01 m/s), docs/reference/scenes.md
 BP5 = {"rho": 2670.0, "cs": 3464.0, "nu": 0.25, "sigma_n": 25e6, "a0": 0.004, "a_max": 0.04, "b0": 0.03,
        "D_c": 0.14, "D_c_nuc": 0.13, "V_p": 1e-9, "V_init": 1e-9, "V_i": 0.03, "V0": 1e-6, "f0": 0.6,
        "h_s": 2e3, "h_t": 2e3, "H": 12e3, "l": 60e3, "W_f": 40e3, "l_f": 100e3, "w": 12e3, "t_f": 1800.0}
