@@ -9,14 +9,14 @@ from ..errors import InputError
 from .fronts import asperity_row, random_toughness
 from .paper import elliptical_crack, kostrov, lamb, periodic_cracks
 from .scec import tpv3, tpv5, tpv6, tpv101, tpv102, tpv103, tpv104
-from .seas import bp1
+from .seas import bp1, bp5
 
 # The scene builders a study file may name (resolve_builder): exactly these functions of
 # cracklab.scenes, by name. No other name of cracklab.scenes (a helper, or ``np``) is
 # reachable from a study; further builders are registered explicitly (register_builder,
 # or the entry-point group "cracklab.builders").
 BUILDERS = ("lamb", "elliptical_crack", "periodic_cracks", "kostrov", "tpv3", "tpv5", "tpv6", "tpv101", "tpv102",
-            "tpv103", "tpv104", "bp1", "asperity_row", "random_toughness")
+            "tpv103", "tpv104", "bp1", "bp5", "asperity_row", "random_toughness")
 
 ENTRY_POINT_GROUP = "cracklab.builders"
 REGISTERED: dict = {}          # name -> function, from register_builder

@@ -276,5 +276,5 @@ def test_docs_ensembles_own_builders_example_runs(tmp_path, monkeypatch, registr
     shown_error = shown[0].strip().removeprefix("Error: ")
     names = ", ".join(sorted(E.registered_builders()))
     assert str(err.value) == shown_error.replace(
-        "asperity_row, bp1, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv101, tpv102, "
+        "asperity_row, bp1, bp5, elliptical_crack, kostrov, lamb, periodic_cracks, random_toughness, tpv101, tpv102, "
         "tpv103, tpv104, tpv3, tpv5, tpv6", names)
