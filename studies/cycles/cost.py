@@ -1,14 +1,16 @@
 """What a quasi-dynamic BP1 step costs, by part, and what bounds a 1500-year run
 (docs/studies/cycles.md, "Cost against the targets").
 
-    python -m studies.cycles.cost --dz 25 [--steps 300000]
+    python -m studies.cycles.cost --dz 25 [--steps 300000] [-o OUT/cost_dz25.json]
 
 Times, at the state a short run reaches, one evaluation of the rates (the step's unit:
 Dormand-Prince 5(4) takes six per accepted step) and its parts: the transforms of the
 static response, the rate-and-state solve at the sliding points, the rest (glue); and the
 step's own arithmetic (the pair's stage sums, its error estimate and norm). Then the
 floor of a run of ``--steps`` accepted steps (the count of the study's run at that dz)
-if the glue and the step's own arithmetic cost nothing."""
+if the glue and the step's own arithmetic cost nothing; and the steps in BP1-QD's first
+event at 200 m for three tolerances (whether the pair's accuracy or its stability sets
+the steps of a rupture)."""
 from __future__ import annotations
 
 import argparse
@@ -76,17 +78,39 @@ def _step(scene, system, y, repeats):
     return sums + norm
 
 
+def event_steps(dz=200.0, tolerances=(1e-6, 1e-7, 1e-8), depth=80e3, years=230.0) -> dict:
+    """{tolerance: accepted steps in events} of BP1-QD's first event (at ``dz``, the creeping
+    region to ``depth``): how the pair's steps in a rupture grow with its tolerance."""
+    from cracklab import Record, simulate
+    from cracklab.scenes import bp1
+
+    out = {}
+    for tol in tolerances:
+        sc = bp1(dz=dz, years=years, tolerance=tol, depth=depth,
+                 record=Record(fields=("v_3",), region={"x1": (0.0, depth)}, stations={}))
+        ds = simulate(sc)
+        out[f"{tol:g}"] = int(np.sum(ds.max_slip_rate.values >= ds.attrs["event_threshold"]))
+    return {"dz": dz, "depth": depth, "years": years, "steps_in_events": out}
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--dz", type=float, default=25.0)
     p.add_argument("--steps", type=int, default=None, help="accepted steps of the run to bound")
+    p.add_argument("-o", "--out", default=None, help="also write the figures to this JSON file (the study "
+                                                     "page reads OUT/cost_dz<dz>.json)")
     args = p.parse_args(argv)
     b = breakdown(args.dz)
+    b["first_event"] = event_steps()
     floor = 6 * (b["transforms_s"] + b["solve_s"])
     b["step_floor_s"] = floor
     if args.steps:
         b.update({"steps": args.steps, "run_s": args.steps * b["step_s"], "run_floor_s": args.steps * floor})
-    print(json.dumps(b, indent=1))
+    text = json.dumps(b, indent=1)
+    print(text)
+    if args.out:
+        with open(args.out, "w") as f:
+            f.write(text + "\n")
     return 0
 
 

@@ -288,6 +288,36 @@ def _fd_section(res):
     return lines
 
 
+def _cost_section(res, dzs):
+    """The page's lines on the cost target (issue 35: 1500 years at 25 m in under a minute),
+    from the finest run and ``res["cost"]`` (studies/cycles/cost.py at that dz), if measured."""
+    cost = res.get("cost")
+    if not cost:
+        return []
+    r = res["runs"][f"{dzs[-1]:g}"]
+    steps = r["accepted_steps"]
+    ms = {k: 1e3 * cost[k] for k in ("rates_s", "transforms_s", "solve_s", "glue_s", "step_own_s", "step_s")}
+    floor = 6 * (cost["transforms_s"] + cost["solve_s"]) * steps
+    fe = cost["first_event"]
+    return ["### Against the target", "",
+            f"The target, 1500 years at 25 m in under a minute on one core, is not met. At dz = {cost['dz']:g} m "
+            f"({cost['nodes']} nodes, {cost['sliding_points']} sliding) a rate evaluation costs {ms['rates_s']:.2f} ms: "
+            f"the transforms of the static response {ms['transforms_s']:.2f} ms, the rate-and-state solve "
+            f"{ms['solve_s']:.2f} ms, the rest {ms['glue_s']:.2f} ms; an accepted step of Dormand-Prince 5(4) takes "
+            f"six and {ms['step_own_s']:.2f} ms of its own (stage sums, error estimate and norm): {ms['step_s']:.1f} "
+            f"ms (`python -m studies.cycles.cost --dz {cost['dz']:g}`, best of 200 on the shared host). The run took "
+            f"{steps} accepted steps, {r['steps_in_events']} of them in events: with nothing but the transforms and "
+            f"the solves it would take {floor / 60:.0f} min. A minute needs about {floor / 60:.0f} times fewer "
+            "steps or evaluations. The steps in events are set by the pair's accuracy, not by its stability (the "
+            f"first event at {fe['dz']:g} m, creeping region to {fe['depth'] / 1e3:g} km, takes "
+            + ", ".join(f"{n} steps at tolerance {tol}" for tol, n in fe["steps_in_events"].items())
+            + ": about 10^(1/5) more per decade, the order of the pair), so a looser tolerance buys little; what "
+            "would meet the target is a step that "
+            "treats the stiff part implicitly (the radiation damping and the static response are diagonal in the "
+            "Fourier domain) with an order and error control of its own, or fewer nodes: the creeping region to "
+            "320 km holds 7 of every 8 (docs/studies/cycles.md, \"The periodic images\").", ""]
+
+
 def write_page(res, dzs, page, figs, command):
     runs = res["runs"]
     lines = ["# Sequences: SEAS BP1-QD and BP1-FD" if res.get("fd") else "# Sequences: SEAS BP1-QD", "",
@@ -307,8 +337,9 @@ def write_page(res, dzs, page, figs, command):
         r = runs[f"{dz:g}"]
         lines.append(f"| {dz:g} m | {r['nodes']} | {r['years']:g} | {r['wall_s']:.0f} s | {r['accepted_steps']} | "
                      f"{r['smallest_step']:.2g} s | {r['largest_step'] / YEAR:.2g} yr | {r['steps_in_events']} |")
-    lines += ["", "Wall times on a shared 2-core host (one core per run, other jobs running), not a benchmark.",
-              "", "## Events", ""]
+    lines += ["", "Wall times on a shared 2-core host (one core per run, other jobs running), not a benchmark.", ""]
+    lines += _cost_section(res, dzs)
+    lines += ["## Events", ""]
     for dz in dzs:
         r = runs[f"{dz:g}"]
         ev = r["events"]
@@ -413,11 +444,12 @@ def main(argv=None) -> int:
     if args.fd:
         res["fd"] = analyse(out, args.fd, dynamic=True)["runs"]
         res["qd_at_fd"] = analyse(out, [dz for dz in args.fd if store_of(out, dz).exists()])["runs"]
-    if args.ensemble:
-        res["ensemble"] = analyse_ensemble(args.ensemble)
     res["domain"] = run_domain(out) if not args.report_only or (out / "domain_depth80km.json").exists() else {}
     if args.ensemble:
         res["ensemble"] = analyse_ensemble(args.ensemble)
+    cost = out / f"cost_dz{args.dz[-1]:g}.json"
+    if cost.exists():
+        res["cost"] = json.loads(cost.read_text())
     (out / "cycles_results.json").write_text(json.dumps(res, indent=1))
     figdir = Path(args.figures)
     figdir.mkdir(parents=True, exist_ok=True)
