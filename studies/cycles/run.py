@@ -315,7 +315,7 @@ def _cost_section(res, dzs):
             "would meet the target is a step that "
             "treats the stiff part implicitly (the radiation damping and the static response are diagonal in the "
             "Fourier domain) with an order and error control of its own, or fewer nodes: the creeping region to "
-            "320 km holds 7 of every 8 (docs/studies/cycles.md, \"The periodic images\").", ""]
+            "320 km holds 7 of every 8 (\"The periodic images\" below).", ""]
 
 
 def write_page(res, dzs, page, figs, command):
@@ -395,8 +395,9 @@ def write_page(res, dzs, page, figs, command):
               "peaks near 10^-0.4 m/s in both (the figure below).",
               "- Open: at the surface the first two earthquakes slide at 4.5 m/s but the later ones at 0.4-2 m/s, "
               "some of them stopping at depth and restarting within hours; the description's ~5 m/s is for every "
-              "earthquake. A 25 m run and the platform's station data (not on this machine) would tell whether "
-              "this is resolution or the description's round figure.", ""]
+              f"earthquake. The same events come at dz = {dzs[0]:g} and {dzs[-1]:g} m (the tables above), so it is "
+              "not resolution; the platform's station data (not on this machine) would tell whether the "
+              "description's figure is a round one.", ""]
     if res.get("fd"):
         lines += _fd_section(res)
     if res.get("ensemble"):
