@@ -3,7 +3,6 @@ the kind of storage chosen from the path or URL, one error for a scheme no kind 
 the kinds installed by the entry-point group "cracklab.stores", a run into a local store
 (every file written through ``LocalStore.write``), its lock, and a run into an S3 store
 on the loopback S3 server (tests/s3_server.py; no client mocked)."""
-from importlib.metadata import EntryPoint
 from pathlib import Path
 
 import numpy as np
@@ -40,9 +39,14 @@ class TupleStore(Store):
         return self.target
 
 
-def _installed(monkeypatch, value):
-    ep = EntryPoint(name="tuple", value=value, group=stores.ENTRY_POINT_GROUP)
-    monkeypatch.setattr("cracklab.output.stores.registry._installed", lambda: {"tuple": ep})
+def _installed(monkeypatch, tmp_path, value):
+    """Install a package on sys.path whose metadata declares the entry point "tuple" =
+    ``value`` in the group "cracklab.stores", as pip would."""
+    info = tmp_path / "site" / "tuplestore-0.1.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: tuplestore\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(f"[{stores.ENTRY_POINT_GROUP}]\ntuple = {value}\n")
+    monkeypatch.syspath_prepend(str(tmp_path / "site"))
 
 
 @pytest.mark.parametrize("target, kind", [("run.zarr", LocalStore), (Path("a/b.zarr"), LocalStore),
@@ -62,9 +66,9 @@ def test_a_scheme_no_store_takes_is_one_error_naming_it_and_the_accepted_ones():
                                "local paths and fsspec URLs (s3://, gs://, az://, memory://, ...); check the URL")
 
 
-def test_the_kinds_listed_and_an_installed_one_taking_its_schemes_first(monkeypatch):
+def test_the_kinds_listed_and_an_installed_one_taking_its_schemes_first(monkeypatch, tmp_path):
     assert list(stores.kinds()) == ["local", "fsspec"]
-    _installed(monkeypatch, f"{__name__}:TupleStore")
+    _installed(monkeypatch, tmp_path, f"{__name__}:TupleStore")
     assert list(stores.kinds()) == ["tuple", "local", "fsspec"]
     assert type(store_for("tuple://x/y")) is TupleStore and type(store_for("s3://b/x")) is TupleStore
     assert type(store_for("x.zarr")) is LocalStore and type(store_for("gs://b/x")) is FsspecStore
@@ -72,8 +76,8 @@ def test_the_kinds_listed_and_an_installed_one_taking_its_schemes_first(monkeypa
         store_for("foo://x")
 
 
-def test_an_entry_point_that_is_not_a_store_is_refused(monkeypatch):
-    _installed(monkeypatch, "cracklab.output.stores:store_for")
+def test_an_entry_point_that_is_not_a_store_is_refused(monkeypatch, tmp_path):
+    _installed(monkeypatch, tmp_path, "cracklab.output.stores:store_for")
     with pytest.raises(StoreError, match=r"tuple: the entry point 'cracklab.output.stores:store_for' of the group "
                                          r"'cracklab.stores' is not a cracklab.output.stores.Store subclass"):
         store_for("x.zarr")

@@ -113,15 +113,24 @@ def test_a_last_step_that_fails_its_tolerance_is_split():
 
 
 def test_a_non_finite_step_at_the_floor_names_its_place():
-    """The message of a dynamic step that gave NaN names the first non-finite unknown's node
-    and depth, not node 0."""
-    from cracklab import Sequence
-    from cracklab.solver.sequence.predictor_corrector import _failure
+    """A dynamic step at the floor that cannot give finite values stops the run with a
+    SimulationError naming the first non-finite unknown's node and depth, not node 0: here
+    the slip rate at node 123 is NaN at the start, so the step's slip and, through the
+    transforms, every traction are not finite."""
+    import pytest
+
+    from cracklab import Sequence, SimulationError
+    from cracklab.solver.sequence.control import StepControl
+    from cracklab.solver.sequence.predictor_corrector import integrate_dynamic
     from cracklab.solver.sequence.run import system_of
 
     system = system_of(_rupture(Sequence(response="dynamic", plate_rate_3=1e-9, dt_max=1.0)))
-    y = np.zeros(2 * system.n)
+    y = system.initial()
     f = np.zeros_like(y)
-    f[system.n + 123] = np.nan           # the state's rate at node 123
-    text = _failure(system, 10.0, 0.01, y, f)
-    assert "node (123, 0) (x1 = 12300, x3 = 0), state psi" in text and "t = 10 s" in text
+    system.start(f)
+    f[123] = np.nan                      # the slip rate at node 123
+    control = StepControl(tolerance=1e-5, dt_min=0.01, dt_max=1.0, dt_first=0.01)
+    with pytest.raises(SimulationError) as info:
+        next(integrate_dynamic(system, y, 10.0, 20.0, control, rates=f))
+    text = str(info.value)
+    assert "node (123, 0) (x1 = 12300, x3 = 0), slip delta_3" in text and "t = 10 s" in text, text
