@@ -45,9 +45,10 @@ __all__ = ["NearTable", "VariableHistory", "T0_VARIABLE", "memory"]
 T0_VARIABLE = 4.0
 #: -Re z beyond which e^z (below 2e-22) is left out of a sum of terms of order one
 NEGLIGIBLE = 50.0
-#: panels of [0, T0] and the degree of their Chebyshev series of Z
-_PANELS = 16
-_DEGREE = 24
+#: panels of [0, T0] and the degree of their Chebyshev series of Z (P0 and P00 to round-off,
+#: 1e-15, for every kernel: tests/history/test_variable_history.py)
+_PANELS = 64
+_DEGREE = 10
 
 
 def _capacity(r, T0, h_floor):
@@ -259,13 +260,18 @@ def _push(ring, off, cap, j, V):
 @njit()
 def _near(p0, p00, half, T0, ua, ub):
     """(w_a, w_b) of a piece from u_b to u_a on the exact kernel over u < T0 (times r)."""
-    d = ua - ub
-    x = ub
+    P0x, P00x = _p(p0, p00, half, ub)
     y = ua if ua < T0 else T0
-    P0x, P00x = _p(p0, p00, half, x)
     P0y, P00y = _p(p0, p00, half, y)
+    return _near_w(P0x, P00x, P0y, P00y, ua, ub, y)
+
+
+@njit()
+def _near_w(P0x, P00x, P0y, P00y, ua, ub, y):
+    """``_near`` from P0, P00 at u_b (x) and at y = min(u_a, T0)."""
+    d = ua - ub
     d00 = P00y - P00x
-    return (((y - ub) * P0y - (x - ub) * P0x - d00) / d, ((ua - y) * P0y - (ua - x) * P0x + d00) / d)
+    return ((y - ub) * P0y - d00) / d, ((ua - y) * P0y - d * P0x + d00) / d
 
 
 @njit()
@@ -305,11 +311,15 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
         rk = r[k]
         acc = 0.0 + 0.0j
         bk = 0.0
+        ck = cap[k]
+        base = off[k]
         if cached and run >= cL[k] - 1 and n - first[k] >= cL[k] - 1:
             # every piece of the window is a step of h: the weights of the last uniform run
             o = cwo[k]
+            i = n % ck                              # the ring's slot of step end n + 1 - e
             for e in range(1, cL[k] + 1):
-                acc += cw[o + e] * ring[off[k] + (n + 1 - e) % cap[k]]
+                acc += cw[o + e] * ring[base + i]
+                i = i - 1 if i > 0 else ck - 1
             bk = cw[o]
             for p in range(P):
                 kR[k, p] = cg[k, p] * SR[k, p]
@@ -323,7 +333,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                     for p in range(P):
                         sB[k, p] += cs[k, i, p]
                 else:
-                    V = ring[off[k] + (n + 1 - e) % cap[k]]
+                    V = ring[base + (n + 1 - e) % ck]
                     for p in range(P):
                         kR[k, p] += cs[k, i, p] * V.real
                         kI[k, p] += cs[k, i, p] * V.imag
@@ -336,15 +346,22 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                 kR[k, p] = g * SR[k, p]
                 kI[k, p] = g * SI[k, p]
                 sB[k, p] = 0.0
-            # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step)
+            # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step);
+            # P0, P00 at a piece's older end are those at the next older piece's newer end
             ub = 0.0
+            P0x, P00x = _p(p0, p00, half, 0.0)
+            i = n % ck                  # the ring's slot of step end j
+            ih = n % hcap               # the slot of step j's length
+            Vb = 0.0 + 0.0j
             for j in range(n, first[k] - 1, -1):
-                hj = h if j == n else hring[j % hcap]
+                hj = h if j == n else hring[ih]
                 ua = ub + rk * hj
-                Va = ring[off[k] + j % cap[k]]
-                Vb = 0.0 + 0.0j if j == n else ring[off[k] + (j + 1) % cap[k]]
+                Va = ring[base + i]
                 if ub < T0:                                   # near: the exact kernel
-                    wa, wb = _near(p0, p00, half, T0, ua, ub)
+                    y = ua if ua < T0 else T0
+                    P0y, P00y = _p(p0, p00, half, y)
+                    wa, wb = _near_w(P0x, P00x, P0y, P00y, ua, ub, y)
+                    P0x, P00x = P0y, P00y
                     acc += (wa * Va + wb * Vb) / rk
                     if j == n:
                         bk += wb / rk
@@ -358,6 +375,9 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                 if ua >= hi:
                     break
                 ub = ua
+                Vb = Va
+                i = i - 1 if i > 0 else ck - 1
+                ih = ih - 1 if ih > 0 else hcap - 1
         tail = 0.0 + 0.0j
         tb = 0.0
         for p in range(P):

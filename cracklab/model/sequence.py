@@ -33,7 +33,10 @@ class Sequence:
       response, t_end / 50, dx / c_s); ``pair``: the embedded Runge-Kutta pair of the
       quasi-dynamic response ("dormand_prince", order 5; "bogacki_shampine", order 3). The
       dynamic response steps by a predictor-corrector (order 2) and takes a step of dt_min
-      whatever its error: that is the fixed-step ruptures' step.
+      whatever its error: that is the fixed-step ruptures' step; while its largest slip
+      rate is below ``slow_rate`` (velocity, >= 0; None: 1e-3 of the least sigma a / eta
+      over the fault, where the radiation damping is negligible; 0: never) it steps by
+      ``pair`` too.
     * Recording: the stations and the largest slip rate every ``station_every`` accepted
       steps; the fields of ``record.fields`` every ``slow_interval`` between events and
       every ``fast_interval`` during them (time; None: t_end / 100 and 100 dx / c_s), and
@@ -51,6 +54,7 @@ class Sequence:
     dt_max: float | None = None
     dt_first: float | None = None
     pair: str = "dormand_prince"
+    slow_rate: float | None = None
     event_threshold: float = 1e-3
     slow_interval: float | None = None
     fast_interval: float | None = None
@@ -70,6 +74,8 @@ class Sequence:
         for name in ("dt_min", "dt_max", "dt_first", "slow_interval", "fast_interval"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, _number(f"sequence.{name}", getattr(self, name)))
+        if self.slow_rate is not None:
+            object.__setattr__(self, "slow_rate", _number("sequence.slow_rate", self.slow_rate, allow_zero=True))
         if not isinstance(self.pair, str) or self.pair not in PAIRS:
             raise InputError("sequence.pair", f"must be one of {', '.join(PAIRS)}, got {self.pair!r}")
         if isinstance(self.station_every, bool) or not isinstance(self.station_every, (int, np.integer)) \

@@ -37,6 +37,7 @@ class DynamicResponse:
         self.dynamic = 0.5 * material.mu * qm
         self.engines = {ch: VariableHistory(ch, material.nu, qm * material.cs, h_floor) for ch in self.static.factor}
         self._AB = None
+        self._h = None          # the step prepared (a stage's prepare of the same step is kept)
 
     def start(self, v: dict) -> None:
         """The slip rate at t = 0."""
@@ -45,7 +46,10 @@ class DynamicResponse:
             eng.start(V[ch].ravel()[self.moving])
 
     def prepare(self, h: float) -> None:
+        if self._AB is not None and h == self._h:
+            return
         self._AB = {ch: eng.prepare(h) for ch, eng in self.engines.items()}
+        self._h = h
 
     def traction(self, delta: dict, v_end: dict) -> dict:
         """{component: F} at the end of the step prepared, for the slip ``delta`` there and a
@@ -65,7 +69,7 @@ class DynamicResponse:
         V, _ = self.static.spectra(v_end)
         for ch, eng in self.engines.items():
             eng.commit(V[ch].reshape(-1)[self.moving])
-        self._AB = None
+        self._AB = self._h = None
 
     def get_state(self) -> dict:
         return {ch: eng.get_state() for ch, eng in self.engines.items()}
@@ -73,6 +77,7 @@ class DynamicResponse:
     def set_state(self, state: dict) -> None:
         for ch, eng in self.engines.items():
             eng.set_state(state[ch])
+        self._AB = self._h = None
 
 
 class FullyDynamic(QuasiDynamic):
@@ -118,6 +123,15 @@ class FullyDynamic(QuasiDynamic):
         if len(self.comps) == 1:
             return np.abs(dd[self.comps[0]][s])
         return np.sqrt(sum(dd[c][s] ** 2 for c in self.comps))
+
+    def slow_rate(self, fraction=1e-3) -> float:
+        """The slip rate below which the radiation damping eta V moves the solved slip rate
+        by at most ``fraction`` of a change of the traction's end rate: fraction times the
+        least sigma a / eta over the sliding points (the slow steps' bound, predictor_corrector.py)."""
+        s = self.slides
+        if not np.any(s):
+            return 0.0
+        return float(fraction * np.min(self.sigma_s * self._a[s]) / self.eta)
 
     def rate_fields(self, dy):
         """{component: slip rate field} of the rates ``dy``."""

@@ -11,7 +11,16 @@ is pushed into the history. The error of the step is y' - y* (on slip h (f* - f_
 Euler against the trapezoid, an embedded pair of order 2),
 held within the tolerance as the quasi-dynamic pairs are (integrate.py); but no step is
 shorter than ``control.dt_min``, the dynamic step beta dx / c_s: a step there is taken
-whatever its estimate, as the fixed-step ruptures are (it is their step)."""
+whatever its estimate, as the fixed-step ruptures are (it is their step).
+
+While the plane is slow (its largest slip rate below ``slow_rate``) a step is one of the
+embedded ``pair`` (integrate.py's, of order 5 by default) on the same system: stage i is
+evaluated at t_n + c_i h with the history prepared for a step of c_i h and the end's slip
+rate in its newest piece taken from stage i - 1. That rate enters the traction only through
+the radiation-damping term, whose effect on the solved slip rate is the factor
+eta V / (sigma a) or less (below 1e-3 at the default ``slow_rate``), so the pair keeps its
+order where the plane creeps, and the long slow phases take the pair's long steps instead
+of the second-order ones'."""
 from __future__ import annotations
 
 import numpy as np
@@ -22,10 +31,16 @@ from .integrate import Accepted, end_step, error_norm, place
 ORDER = 2
 
 
-def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=None):
+#: a slow step of the pair shorter than this many dynamic steps is left to the predictor-corrector
+SLOW_STEPS = 10
+
+
+def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=None, pair=None, slow_rate=0.0):
     """Accepted steps of the fully dynamic ``system`` from (t0, y0) until t_end: a generator
     of :class:`integrate.Accepted`, as :func:`integrate.integrate`. ``rates``: f at (t0, y0)
-    when known (a resumed run's; its history is the system's state)."""
+    when known (a resumed run's; its history is the system's state). ``pair`` (an
+    :class:`pairs.EmbeddedPair`, or None): the step while the largest slip rate is below
+    ``slow_rate`` and the step at least SLOW_STEPS dynamic steps long."""
     t, y = float(t0), np.array(y0, dtype=float)
     h = max(float(dt or control.dt_first), control.dt_min)
     if rates is None:
@@ -35,21 +50,29 @@ def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=No
         f = np.array(rates, dtype=float)
     n = n0
     floor = control.dt_min * (1 + 1e-12)
+    tableau = None if pair is None else _tableau(pair)
+    k = None if pair is None else np.empty((pair.stages, y.size))
     while t < t_end:
         rejected, split = 0, False
+        slow = tableau is not None and h >= SLOW_STEPS * control.dt_min and _slow(system, f, slow_rate)
         while True:
             step, last = end_step(t, t_end, h, control.dt_min, split)
-            y_new, f_new, err, ok = _try(system, t, y, f, step)
+            if slow:
+                y_new, f_new, err, ok = _try_pair(system, pair, tableau, k, t, y, f, step)
+            else:
+                y_new, f_new, err, ok = _try(system, t, y, f, step)
             size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
             if size <= 1.0 or (ok and step <= floor):
                 break
             if step <= floor:
                 raise SimulationError(_failure(system, t, step, y_new, f_new))
             rejected += 1
-            h = control.next_step(step, size, ORDER, accepted=False)
+            h = control.next_step(step, size, pair.order if slow else ORDER, accepted=False)
+            if slow and h < SLOW_STEPS * control.dt_min:     # too short for the pair: the dynamic step
+                slow = False
             if last and not split:      # the step that reaches t_end failed: try shorter ones
                 h, split = min(h, 0.5 * step), True
-        h_next = control.next_step(step, size, ORDER, accepted=True) if not last else h
+        h_next = control.next_step(step, size, pair.order if slow else ORDER, accepted=True) if not last else h
         system.response.commit(system.rate_fields(f_new))
         t, y, f = (t_end if last else t + step), y_new, f_new
         n += 1
@@ -70,6 +93,45 @@ def _try(system, t, y, f, h):
     except (SimulationError, FloatingPointError):
         return y, f, np.full_like(y, np.nan), False
     return y_c, f_c, y_c - y_p, bool(np.all(np.isfinite(y_c)) and np.all(np.isfinite(f_c)))
+
+
+def _slow(system, f, slow_rate) -> bool:
+    """Whether the largest slip rate of the rates ``f`` is below ``slow_rate``."""
+    speed = system._speed(f)
+    return bool(speed.size == 0 or speed.max() < slow_rate)
+
+
+def _tableau(pair):
+    """(A rows, b, e) of ``pair`` as arrays."""
+    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
+    return A, np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+
+
+def _try_pair(system, pair, tableau, k, t, y, f, h):
+    """(y', f', error estimate, whether the rates stayed finite) of one step of ``pair``:
+    stage i at t + c_i h with the history prepared for c_i h, the end's slip rate of
+    stage i - 1 (the newest piece's), and f' at (t + h, y') with the history prepared for h
+    (what :meth:`DynamicResponse.commit` then pushes)."""
+    A, b, e = tableau
+    k[0] = f
+    try:
+        for i in range(1, pair.stages):
+            yi = y + h * (A[i] @ k[:i])
+            system.response.prepare(pair.c[i] * h)
+            system.v_end = system.rate_fields(k[i - 1])
+            k[i] = system.rates(t + pair.c[i] * h, yi)
+        if pair.fsal and pair.c[-1] == 1.0:
+            y_new, f_new = yi, k[-1].copy()
+        else:
+            y_new = y + h * (b @ k)
+            system.response.prepare(h)
+            system.v_end = system.rate_fields(k[-1])
+            f_new = system.rates(t + h, y_new)
+        err = h * (e @ k)
+    except (SimulationError, FloatingPointError):
+        return y, f, np.full_like(y, np.nan), False
+    ok = bool(np.all(np.isfinite(y_new)) and np.all(np.isfinite(f_new)))
+    return y_new, f_new, err, ok
 
 
 def _failure(system, t, h, y_new, f_new) -> str:

@@ -114,8 +114,11 @@ class SequenceRun:
         if self.n == 0:
             yield self.state()
         if self.dynamic:
+            seq = self.scene.sequence
+            slow = self.system.slow_rate() if seq.slow_rate is None else seq.slow_rate
             steps = integrate_dynamic(self.system, self.y, self.t, self.scene.t_end, self.control, dt=self.dt_next,
-                                      n0=self.n, rates=self.rates)
+                                      n0=self.n, rates=self.rates, pair=self.pair if slow > 0 else None,
+                                      slow_rate=slow)
         else:
             steps = integrate(self.system, self.y, self.t, self.scene.t_end, self.pair, self.control,
                               dt=self.dt_next, n0=self.n, rates=self.rates)
