@@ -41,8 +41,10 @@ from .fit import get_fit
 
 __all__ = ["NearTable", "VariableHistory", "T0_VARIABLE", "memory"]
 
-#: the start of the fitted tail in u = q c_s (t - s)
-T0_VARIABLE = 4.0
+#: the start of the fitted tail in u = q c_s (t - s): a mode keeps the pieces of its last
+#: T0 / r seconds, T0 / (r h) of them, against fits of 11, 30 and 34 terms for Z_III, Z_I
+#: and Z_II (7, 24 and 28 from T0 = 4, with eight times the pieces)
+T0_VARIABLE = 0.5
 #: -Re z beyond which e^z (below 2e-22) is left out of a sum of terms of order one
 NEGLIGIBLE = 50.0
 #: panels of [0, T0] and the degree of their Chebyshev series of Z (P0 and P00 to round-off,

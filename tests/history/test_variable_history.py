@@ -80,7 +80,9 @@ def test_the_error_is_the_fits():
 
 @pytest.mark.parametrize("kernel", ["I", "II", "III"])
 def test_the_near_table_is_the_closed_form(kernel):
-    u = np.linspace(0.0, 4.0, 57)
+    from cracklab.history.variable import T0_VARIABLE
+
+    u = np.linspace(0.0, T0_VARIABLE, 57)
     P0, P00 = NearTable(kernel, NU)(u)
     assert np.max(np.abs(P0 - Z_integral(kernel, u, NU))) < 1e-13
     # P00 = int_0^u P0 by Gauss-Legendre on the closed form of P0
