@@ -256,8 +256,9 @@ def _fd_section(res):
     lines = ["## BP1-FD: the fully dynamic response", "",
              "The same fault with `dynamic=True`: the elastodynamic history of every mode kept exactly at a "
              "variable step (docs/reference/equations.md, \"Sequences: the dynamic response at a variable step\"), "
-             "a predictor-corrector of order 2 (tolerance 1e-5) whose step never goes below the dynamic step "
-             "beta dz / c_s = 0.5 dz / c_s.", "",
+             "tolerance 1e-5: a predictor-corrector of order 2 whose step never goes below the dynamic step "
+             "beta dz / c_s = 0.5 dz / c_s, and Dormand-Prince 5(4) on the same system while the largest slip rate "
+             "is below `sequence.slow_rate` (1.1e-4 m/s here).", "",
              "| dz | nodes | years | wall time | accepted steps | smallest step | largest step | steps in events | "
              "time in events |", "|---|---|---|---|---|---|---|---|---|"]
     for dz, r in fd.items():
@@ -272,6 +273,17 @@ def _fd_section(res):
                   "starting at (years) " + ", ".join(f"{x:.2f}" for x in r["earthquakes_yr"])
                   + "; recurrence intervals (years): " + ", ".join(f"{x:.2f}" for x in r["recurrence_yr"]), ""]
         lines += events_table(ev)
+    keys = sorted(fd, key=float, reverse=True)
+    if len(keys) >= 2:
+        a, b = fd[keys[-2]], fd[keys[-1]]
+        qa, qb = a["earthquakes_yr"], b["earthquakes_yr"]
+        n = min(len(qa), len(qb))
+        lines += ["### Self-convergence of BP1-FD", "",
+                  f"Between dz = {keys[-2]} m and {keys[-1]} m: the first {n} earthquakes start "
+                  + ", ".join(f"{x - y:+.2f}" for x, y in zip(qa[:n], qb[:n]))
+                  + f" years apart; mean recurrence {np.mean(a['recurrence_yr']):.2f} and "
+                  f"{np.mean(b['recurrence_yr']):.2f} years; largest slip rate {max(a['events']['peak_slip_rate']):.1f}"
+                  f" and {max(b['events']['peak_slip_rate']):.1f} m/s.", ""]
     qd = res.get("qd_at_fd", {})
     both = [dz for dz in fd if dz in qd]
     if both:
@@ -400,6 +412,9 @@ def write_page(res, dzs, page, figs, command):
               "description's figure is a round one.", ""]
     if res.get("fd"):
         lines += _fd_section(res)
+    if res.get("uguca"):
+        from studies.cycles.uguca import section
+        lines += section(res["uguca"])
     if res.get("ensemble"):
         e = res["ensemble"]
         lines += ["## An ensemble of sequences", "",
@@ -448,6 +463,8 @@ def main(argv=None) -> int:
     res["domain"] = run_domain(out) if not args.report_only or (out / "domain_depth80km.json").exists() else {}
     if args.ensemble:
         res["ensemble"] = analyse_ensemble(args.ensemble)
+    if (out / "uguca_bp1.json").exists():       # python -m studies.cycles.uguca
+        res["uguca"] = json.loads((out / "uguca_bp1.json").read_text())
     cost = out / f"cost_dz{args.dz[-1]:g}.json"
     if cost.exists():
         res["cost"] = json.loads(cost.read_text())
