@@ -139,6 +139,9 @@ SECTION_KEYS = {
         "fast_interval": Key("time", SCALE, "fields recorded this often during events (absent: 100 dx / cs)", (0.0,)),
         "station_every": Key("-", "an integer >= 1", "stations and the largest slip rate every this many accepted "
                              "steps", (0, 1.5)),
+        "mirror": Key("-", "true or false; every field even about x1 = 0", "the plane is even about x1 = 0 (a free "
+                      "surface of the plane problem, the grid holding the fault and its image): the traction is made "
+                      "exactly even before each solve", (1, "yes")),
     },
 }
 

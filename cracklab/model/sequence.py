@@ -37,6 +37,11 @@ class Sequence:
       rate is below ``slow_rate`` (velocity, >= 0; None: 1e-3 of the least sigma a / eta
       over the fault, where the radiation damping is negligible; 0: never) it steps by
       ``pair`` too.
+    * ``mirror``: the plane is even about x1 = 0 (node (i, k) is node (n1 - i, k)): a free
+      surface of the plane problem, the grid holding the fault and its image (scenes.bp1).
+      The traction is made exactly even before each solve, so that the transforms'
+      round-off cannot grow into ruptures of the fault and its image at different times;
+      the scene's fields must be even.
     * Recording: the stations and the largest slip rate every ``station_every`` accepted
       steps; the fields of ``record.fields`` every ``slow_interval`` between events and
       every ``fast_interval`` during them (time; None: t_end / 100 and 100 dx / c_s), and
@@ -59,6 +64,7 @@ class Sequence:
     slow_interval: float | None = None
     fast_interval: float | None = None
     station_every: int = 1
+    mirror: bool = False
 
     def __post_init__(self):
         check_fields_nesting(self, "sequence")
@@ -81,6 +87,9 @@ class Sequence:
         if isinstance(self.station_every, bool) or not isinstance(self.station_every, (int, np.integer)) \
                 or self.station_every < 1:
             raise InputError("sequence.station_every", f"must be an integer >= 1, got {self.station_every!r}")
+        if not isinstance(self.mirror, (bool, np.bool_)):
+            raise InputError("sequence.mirror", f"must be true or false, got {self.mirror!r}")
+        object.__setattr__(self, "mirror", bool(self.mirror))
         if self.creep is not None:
             arr = np.asarray(self.creep)
             if arr.dtype != bool:
@@ -159,11 +168,32 @@ class Sequence:
         if np.all(creep | bonded):
             raise InputError("sequence.creep", "covers the whole plane (with the bonded points): no point is left "
                                                "to slide under the friction law")
+        if self.mirror:
+            _check_even(scene, creep)
         rec = scene.record
         if rec.every is not None or rec.times is not None:
             raise InputError("record.every" if rec.every is not None else "record.times",
                              "a sequence records its fields at sequence.slow_interval between events and "
                              "sequence.fast_interval during them; leave record.every and record.times out")
+
+
+def _check_even(scene, creep) -> None:
+    """With ``sequence.mirror``: every field of the scene even about x1 = 0, or one error naming the first that is not."""
+    from ..solver.sequence.mirror import mirror_index
+
+    law, shape = scene.law, scene.grid.shape
+    image = mirror_index(shape)
+    fields = [("sequence.creep", creep)]
+    fields += [(f"law.{name}", getattr(law, name)) for name in ("a", "b", "L", "V0", "f0", "sigma_n", "V_ini", "bonded")
+               if getattr(law, name, None) is not None]
+    fields += [(f"loading.tau0_{c}", scene.loading.field(c)) for c in (1, 2, 3)]
+    for name, value in fields:
+        arr = np.broadcast_to(np.asarray(value), shape).ravel()
+        if not np.array_equal(arr, arr[image]):
+            bad = int(np.flatnonzero(arr != arr[image])[0])
+            i, k = np.unravel_index(bad, shape)
+            raise InputError(name, f"must be even about x1 = 0 with sequence.mirror (node ({i}, {k}) differs from its "
+                                   f"image ({(-i) % shape[0]}, {k})); make the field even or leave sequence.mirror out")
 
 
 def _number(field, value, allow_zero=False) -> float:

@@ -36,13 +36,14 @@ def steady_prestress(p, a, V, V_state, eta):
         (p["f0"] + p["b0"] * np.log(p["V0"] / V_state)) / a)) + eta * V
 
 
-def seas_sequence(dynamic, tolerance, V_p, creep):
+def seas_sequence(dynamic, tolerance, V_p, creep, mirror=False):
     """A SEAS benchmark's Sequence: the plate rate V_p along x1 or x3 (``V_p`` = {component:
     rate}), the ``creep`` mask, fields every 5 years between events and every second during
-    them (0.1 s in the fully dynamic response, ``dynamic``), steps of at most a year."""
+    them (0.1 s in the fully dynamic response, ``dynamic``), steps of at most a year;
+    ``mirror``: the plane even about x1 = 0 (Sequence.mirror)."""
     return Sequence(response="dynamic" if dynamic else "quasi_dynamic",
                     **{f"plate_rate_{c}": v for c, v in V_p.items()}, creep=creep, tolerance=tolerance,
-                    slow_interval=5 * YEAR, fast_interval=0.1 if dynamic else 1.0, dt_max=YEAR)
+                    slow_interval=5 * YEAR, fast_interval=0.1 if dynamic else 1.0, dt_max=YEAR, mirror=mirror)
 
 
 def bp1_station_name(depth_km: float) -> str:
@@ -106,7 +107,7 @@ def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, dep
     if record is None:
         record = Record(fields=("delta_3", "v_3", "tau_3", "psi"), region={"x1": (0.0, depth)},
                         stations={bp1_station_name(d): (1e3 * d,) for d in BP1_DEPTHS})
-    seq = seas_sequence(dynamic, tolerance, {3: p["V_p"]}, creep)
+    seq = seas_sequence(dynamic, tolerance, {3: p["V_p"]}, creep, mirror=True)
     kw = {} if numerics is None else {"numerics": numerics}
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_3=float(tau0)), t_end=years * YEAR,
                  record=record, sequence=seq, units={"length": "m", "time": "s", "stress": "Pa"}, name="bp1", **kw)

@@ -85,9 +85,9 @@ class FullyDynamic(QuasiDynamic):
     shorter than ``h_floor`` (a Scene's dt = beta dx / c_s by default)."""
 
     def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None,
-                 h_floor=None):
+                 h_floor=None, mirror=False):
         super().__init__(material, grid, law, tau0, sigma, plate, creep=creep, stiffness=stiffness,
-                         transforms=transforms)
+                         transforms=transforms, mirror=mirror)
         self.response = DynamicResponse(self.static, material, grid, h_floor)
         self.v_end = None       # {component: the slip rate field the step's end is taken at}
         self.started = False    # whether the history holds t = 0 (before: no convolution)

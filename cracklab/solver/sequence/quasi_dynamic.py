@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import InputError
+from .mirror import mirror_index
 from .static import StaticResponse
 
 
@@ -25,7 +26,8 @@ class QuasiDynamic:
     slip, stress per length): the values of a Scene, which checked them (model/sequence.py,
     ``Sequence.check_scene``; ``system_of`` in run.py builds the system of a scene)."""
 
-    def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None):
+    def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None,
+                 mirror=False):
         comps = tuple(sorted(plate))
         shape = grid.shape
         self.grid, self.law, self.comps = grid, law, comps
@@ -48,6 +50,8 @@ class QuasiDynamic:
         self._L, self._a = (np.broadcast_to(np.asarray(getattr(law, name), dtype=float), shape).ravel()
                             for name in ("L", "a"))
         self._keep = np.concatenate([self.slides] * (len(comps) + 1))
+        # Sequence.mirror: each node's image about x1 = 0, whose traction is made the same
+        self.image = mirror_index(shape) if mirror else None
         self.lnV = None     # the last solve's ln V: Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -70,7 +74,10 @@ class QuasiDynamic:
         delta, _ = self.split(y)
         shape = self.grid.shape
         F = self.elastic({c: delta[c].reshape(shape) for c in self.comps})
-        return {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+        tau = {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+        if self.image is not None:      # exactly even: the same solve at a node and its image
+            tau = {c: 0.5 * (x + x[self.image]) for c, x in tau.items()}
+        return tau
 
     def elastic(self, delta: dict) -> dict:
         """{component: F} of the slip fields ``delta``: the static response."""

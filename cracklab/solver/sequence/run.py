@@ -45,8 +45,9 @@ def system_of(scene, transforms=None) -> QuasiDynamic:
     args = (scene.material, grid, law, tau0, sigma, plate)
     if seq.response == "dynamic":
         dt_min = steps_of(scene)[0]
-        return FullyDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, h_floor=dt_min)
-    return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms)
+        return FullyDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, h_floor=dt_min,
+                            mirror=seq.mirror)
+    return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, mirror=seq.mirror)
 
 
 def components_of(scene) -> list:
