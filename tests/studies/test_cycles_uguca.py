@@ -27,4 +27,6 @@ def test_the_section_pairs_the_earthquakes_and_states_the_largest_gap():
     text = "\n".join(lines)
     assert "| 0 | 250.00 | 4.46 | 13.7 | 251.00 | 4.70 | 13.7 |" in text
     assert "| 3 | 428.70 | 2.98 | 0.4 | - | - | - |" in text
-    assert "within 1.5 years" in text          # |339.5 - 341.0|, the largest of the deep-nucleated ones
+    # the earthquakes above 0.1 m/s paired in order: 250.0-251.0, 339.5-341.0, 428.7-430.0
+    assert "differ by -1.50 to -1.00 years" in text
+    assert "4 earthquakes here and 3 in uguca" in text and "3 of cracklab's nucleate at depth" in text
