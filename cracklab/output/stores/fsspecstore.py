@@ -41,7 +41,7 @@ from pathlib import Path
 
 from ...errors import StoreError, StoreWarning
 from .base import CHECKPOINT_GROUP, CHECKPOINT_GROUP_DOC, Store
-from .local import LOCK_NAME, StoreLocked, _pid_alive
+from .local import LOCK_NAME, StoreLocked, pid_alive
 
 POINTER = "checkpoint.json"
 POINTER_FORMAT = 1
@@ -280,7 +280,7 @@ class _ObjectLock:
 
     def _stale(self, doc: dict, age: float) -> bool:
         if doc.get("host") == socket.gethostname() and isinstance(doc.get("pid"), int) and \
-                doc.get("pid") != os.getpid() and not _pid_alive(doc["pid"]):
+                doc.get("pid") != os.getpid() and not pid_alive(doc["pid"]):
             return True                  # its process is gone (this host)
         return age > LOCK_STALE_S       # no heartbeat for that long: gone, whatever host
 

@@ -150,7 +150,7 @@ def _zarr_dir():
     return ZarrDir
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -182,7 +182,7 @@ def _lock_is_stale(path: Path, info: dict) -> bool:
             return True
     if info.get("host") == socket.gethostname():
         pid = info.get("pid")
-        return not (isinstance(pid, int) and _pid_alive(pid))
+        return not (isinstance(pid, int) and pid_alive(pid))
     return False        # another host: cannot tell, refuse
 
 
