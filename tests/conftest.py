@@ -43,6 +43,7 @@ SLOW = frozenset({
     # object storage on the loopback S3 server: a killed process resumed, a sequence, a sweep run twice
     "tests/output/test_object_store_resume.py::test_sigkill_of_cracklab_run_into_s3_then_resume",
     "tests/output/test_object_store_lock.py::test_the_heartbeat_keeps_a_lock_fresh_and_a_stale_one_is_taken_over",
+    "tests/output/test_object_store_lock.py::test_two_sweep_processes_started_at_once_on_one_s3_store",
     "tests/sequence/test_sequence_object_store.py::test_a_sequence_into_s3_is_the_in_memory_run_and_resumes_bit_for_bit",
     "tests/ensemble/test_object_store_members.py::test_a_member_rewritten_on_s3_is_never_served_as_complete",
     # studies' runs and compilations in fresh processes with empty caches

@@ -150,3 +150,33 @@ def test_a_sweep_into_a_held_s3_store_is_refused_in_one_line(s3_env, tmp_path):
     assert res.exit_code == 0, res.output                          # released: the sweep runs
     keys = [o["Key"] for o in _client(s3_env).list_objects_v2(Bucket=bucket).get("Contents", [])]
     assert f"ens.zarr/{LOCK}" not in keys and any("/members/" in k for k in keys)
+
+
+def test_two_sweep_processes_started_at_once_on_one_s3_store(s3_env, tmp_path):
+    """Two `cracklab sweep -o s3://...` processes started together: one holds the store
+    and completes it, the other is refused in one line naming the holder, before any
+    member runs; then the store is sound and the lock gone."""
+    import os
+
+    from cracklab.ensemble import member_status
+
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    cmd = [sys.executable, "-m", "cracklab.cli", "sweep", str(study), "--no-progress", "-o", url,
+           "--scheduler", "synchronous"]
+    procs = [subprocess.Popen(cmd, env=dict(os.environ), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+             for _ in range(2)]
+    outs = [p.communicate(timeout=600) for p in procs]
+    codes = sorted(p.returncode for p in procs)
+    errs = [o[1].decode() + o[0].decode() for o in outs]
+    assert codes == [0, 1], errs      # (both 0 only if one ended before the other started: not seen)
+    refused = errs[[p.returncode for p in procs].index(1)]
+    lines = [line for line in refused.strip().splitlines() if line.startswith("Error:")]
+    assert len(lines) == 1 and f"{url} is in use by another sweep (pid " in lines[0], refused
+    assert "Traceback" not in refused and "cracklab-test-secret" not in refused
+    status = member_status(url)
+    assert len(status) == 2 and all(s["complete"] for s in status), status
+    keys = [o["Key"] for o in _client(s3_env).list_objects_v2(Bucket=bucket).get("Contents", [])]
+    assert f"ens.zarr/{LOCK}" not in keys
