@@ -40,6 +40,12 @@ SLOW = frozenset({
     "tests/output/test_resume.py::test_sigkill_mid_run_then_resume",
     "tests/output/test_resume.py::test_sigkill_inside_a_checkpoint_write",
     "tests/output/test_store_integrity.py::test_kill_during_the_final_write_leaves_a_store_not_complete",
+    # object storage on the loopback S3 server: a killed process resumed, a sequence, a sweep run twice
+    "tests/output/test_object_store_resume.py::test_sigkill_of_cracklab_run_into_s3_then_resume",
+    "tests/output/test_object_store_lock.py::test_the_heartbeat_keeps_a_lock_fresh_and_a_stale_one_is_taken_over",
+    "tests/output/test_object_store_lock.py::test_two_sweep_processes_started_at_once_on_one_s3_store",
+    "tests/sequence/test_sequence_object_store.py::test_a_sequence_into_s3_is_the_in_memory_run_and_resumes_bit_for_bit",
+    "tests/ensemble/test_object_store_members.py::test_a_member_rewritten_on_s3_is_never_served_as_complete",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
     "tests/studies/test_studies_quick.py::test_performance_study_stages_quick",

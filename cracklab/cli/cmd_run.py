@@ -99,7 +99,7 @@ def _scene_of(scene: str, sets, allow):
               help="With SCENE a builder's name: an argument of the builder or a scene path, as for "
                    "cracklab new (repeatable): cracklab run tpv3 --set dx=400 -o tpv3.zarr.")
 @click.option("-o", "--output", default=None, type=click.Path(), help="Zarr store to write (required but "
-              "with --dry-run): a local path, or a URL (s3://..., written without checkpoints).")
+              "with --dry-run): a local path, or a URL (s3://...; both checkpointed).")
 @click.option("--progress/--no-progress", default=None, help="Progress bar (default: when on a terminal).")
 @click.option("--checkpoint-every", default=None, metavar="N|Ss",
               help="Checkpoint the run into OUTPUT every N steps, or every S seconds of wall time "
@@ -107,7 +107,7 @@ def _scene_of(scene: str, sets, allow):
 @click.option("--resume/--no-resume", default=True, show_default=True,
               help="When OUTPUT holds an unfinished run of the same scene (killed, interrupted), continue "
                    "it from its last checkpoint (same results); when it holds the complete run, do nothing. "
-                   "--no-resume starts the run over. Needs a local OUTPUT.")
+                   "--no-resume starts the run over.")
 @click.option("--overwrite", is_flag=True,
               help="Replace OUTPUT even when it holds the run of another scene (refused otherwise). Only "
                    "cracklab run stores are replaced, never other files or folders.")
@@ -153,22 +153,15 @@ def run(scene: str, sets, output, progress, checkpoint_every, resume, overwrite,
     if progress is None:
         progress = sys.stderr.isatty()
     path = checkpoint.local_path(output)
-    typed = click.get_current_context().get_parameter_source
     done, first = False, 0
-    if path is None:            # a URL: simulate writes it, but checkpoints only into a local path
+    if path is None:            # a URL: its Store keeps the checkpoints
         from ..output.stores import store_for
 
         try:
-            store_for(output).check()   # its scheme, credentials and bucket, before the note and any step
+            path = store_for(output)
+            path.check()        # its scheme, credentials and bucket, before any step
         except StoreError as exc:
             raise fail(exc) from None
-        if typed("resume") == click.core.ParameterSource.COMMANDLINE and resume:
-            raise click.ClickException(f"--resume: {output} is a URL; runs into an object store have no "
-                                       f"checkpoints to resume from: drop --resume, or write to a local path")
-        resume = False
-        print_note(f"{output} is a URL: the run is written there without checkpoints"
-              f"{' (--checkpoint-every ignored)' if checkpoint_every is not None else ''}, so an interrupted "
-              f"run starts over; for a resumable run write to a local path and copy the store")
     try:
         if path is not None:
             kind, attrs = checkpoint.inspect(path)

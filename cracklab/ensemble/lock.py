@@ -1,6 +1,6 @@
 """The store lock: one sweep at a time into a store (``store_lock``, ``StoreLocked``); each
 kind of storage holds it its own way (``cracklab.output.stores``: a hard-linked lock file
-on a local disk)."""
+on a local disk, a lock object created by a conditional write on an object store)."""
 from __future__ import annotations
 
 from ..output.stores import StoreLocked, store_for
@@ -9,8 +9,8 @@ from ..output.stores.local import LOCK_GRACE_S, LOCK_NAME  # noqa: F401  (ensemb
 
 def store_lock(store: str):
     """Hold the sweep lock of ``store`` (``Store.lock``): a second sweep into the same
-    local store raises ``StoreLocked`` naming the holder; a lock left by a killed sweep
-    (same host, process gone) is taken over. A URL store is not locked (yields None)."""
+    store raises ``StoreLocked`` naming the holder; a lock left by a killed sweep (same
+    host, process gone; at a URL also one whose heartbeat stopped) is taken over."""
     return store_for(store).lock()
 
 

@@ -1,16 +1,17 @@
 """Checkpoints of long runs and the checks on a run's Zarr store.
 
-A checkpoint is one ``.npz`` file, ``<store>/_checkpoint/state.npz``, holding the full
-solver state after some step n (stepper locals, the interface, its half spaces and their history engines,
-the recorder's station series and rupture times) and the number of snapshots the store
-held when it was written. It is written to a temporary file in the same directory,
-flushed to disk and moved over the previous one with ``os.replace``: a kill leaves
-either the previous checkpoint or the new one. The run's store has its final size from
-the start (snapshots NaN until written); snapshots written after the checkpoint are
-written again, with the same values, when the run resumes.
-
-Nested states (dicts of arrays, numbers, strings and None; int or str keys) are stored
-without pickle: arrays as npz members, the rest as one JSON document.
+A checkpoint holds the full solver state after some step n (stepper locals, the interface,
+its half spaces and their history engines, the recorder's station series and rupture
+times) and the number of snapshots the store held when it was written: one ``.npz`` of
+arrays with the rest as one JSON document (nested dicts of arrays, numbers, strings and
+None; int or str keys), never a pickle. It is kept by the run's store
+(``cracklab.output.stores``: ``Store.write_checkpoint``), which commits it atomically: on a
+local disk ``<store>/_checkpoint/state.npz``, written to a temporary file, flushed and
+moved over the previous one with ``os.replace``; on an object store under a fresh key,
+then a pointer object with its SHA-256 written last. A kill leaves either the previous
+checkpoint or the new one. The run's store has its final size from the start (snapshots
+NaN until written); snapshots written after the checkpoint are written again, with the
+same values, when the run resumes.
 """
 from __future__ import annotations
 
@@ -18,7 +19,6 @@ import errno
 import hashlib
 import json
 import os
-import shutil
 import time
 import warnings
 import zipfile
@@ -28,12 +28,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import StoreError
-from .stores.base import is_url
+from .stores.base import CHECKPOINT_GROUP as GROUP, Store, is_url
+from .stores.local import CHECKPOINT_FILE as FILE
 
 RUN_FORMAT = 1          # attr ``cracklab_run_format`` of a run store
 CHECKPOINT_FORMAT = 1   # layout of the checkpoint file
-GROUP = "_checkpoint"
-FILE = "state.npz"
 # test hook only: seconds to sleep inside a checkpoint write, with the new file written
 # but not yet moved into place (lets a test SIGKILL the run in the middle of a write)
 SLEEP_ENV = "CRACKLAB_TEST_CHECKPOINT_SLEEP"
@@ -89,49 +88,40 @@ def _sleep_hook():
         time.sleep(float(delay))
 
 
+def as_store(store) -> Store:
+    """The ``Store`` of ``store`` (a Store, a local path or a URL)."""
+    if isinstance(store, Store):
+        return store
+    from .stores import store_for
+
+    return store_for(store)
+
+
 def write(path, state: dict) -> float:
-    """Atomically write ``state`` to the checkpoint file of store ``path``; return seconds taken."""
+    """Write ``state`` as the checkpoint of store ``path`` (a local path, a URL or a
+    ``Store``), replacing the previous one atomically; return seconds taken."""
     t0 = time.perf_counter()
-    d = Path(path) / GROUP
-    d.mkdir(exist_ok=True)
-    if not (d / "zarr.json").exists():
-        # a Zarr group: readers of the store then ignore the directory silently
-        (d / "zarr.json").write_text('{"zarr_format": 3, "node_type": "group", "attributes": {}}')
     arrays: dict = {}
     meta = json.dumps({"checkpoint_format": CHECKPOINT_FORMAT, "state": _encode(state, arrays)})
-    tmp = d / f"{FILE}.{os.getpid()}.tmp"
-    try:
-        with open(tmp, "wb") as fh:
-            np.savez(fh, __meta__=np.frombuffer(meta.encode(), dtype=np.uint8), **arrays)
-            fh.flush()
-            os.fsync(fh.fileno())
-        _sleep_hook()
-        os.replace(tmp, d / FILE)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    try:  # make the rename itself durable
-        fd = os.open(d, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-    except OSError:
-        pass
+
+    def fill(fh):
+        np.savez(fh, __meta__=np.frombuffer(meta.encode(), dtype=np.uint8), **arrays)
+
+    as_store(path).write_checkpoint(fill, before_commit=_sleep_hook)
     return time.perf_counter() - t0
 
 
 def read(path) -> dict | None:
     """The checkpoint of store ``path`` (None when there is none)."""
-    f = Path(path) / GROUP / FILE
-    if not f.exists():
-        return None
-    try:
-        with np.load(f, allow_pickle=False) as z:
-            arrays = {k: z[k] for k in z.files}
-        meta = json.loads(arrays.pop("__meta__").tobytes().decode())
-    except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
-        raise StoreError(path, f"its checkpoint {f} is unreadable ({exc}); run again without resume") from None
+    with as_store(path).checkpoint_file() as f:
+        if f is None:
+            return None
+        try:
+            with np.load(f, allow_pickle=False) as z:
+                arrays = {k: z[k] for k in z.files}
+            meta = json.loads(arrays.pop("__meta__").tobytes().decode())
+        except (OSError, ValueError, KeyError, zipfile.BadZipFile, EOFError) as exc:
+            raise StoreError(path, f"its checkpoint {f} is unreadable ({exc}); run again without resume") from None
     if meta.get("checkpoint_format") != CHECKPOINT_FORMAT:
         raise StoreError(path, f"its checkpoint has format {meta.get('checkpoint_format')!r}, this cracklab "
                                f"reads format {CHECKPOINT_FORMAT}; run again without resume")
@@ -140,7 +130,7 @@ def read(path) -> dict | None:
 
 def remove(path) -> None:
     """Delete the checkpoint of store ``path`` (after the run finished)."""
-    shutil.rmtree(Path(path) / GROUP, ignore_errors=True)
+    as_store(path).remove_checkpoint()
 
 
 def scene_digest(scene_json: str, inputs: dict) -> str:
@@ -174,9 +164,12 @@ def local_path(store):
 
 
 def inspect(path) -> tuple[str, dict]:
-    """(kind, attrs) of a store path: kind is "absent", "empty" (an empty directory or
-    Zarr group), "run" (a single cracklab run), "ensemble" or "other"."""
-    p = Path(path)
+    """(kind, attrs) of a store path (or URL, or ``Store``): kind is "absent", "empty" (an
+    empty directory or Zarr group), "run" (a single cracklab run), "ensemble" or "other"."""
+    st = as_store(path)
+    if not st.local:
+        return _inspect_url(st)
+    p = st.path
     if not p.exists():
         return "absent", {}
     if not p.is_dir():
@@ -200,6 +193,46 @@ def inspect(path) -> tuple[str, dict]:
         with warnings.catch_warnings():     # a damaged array directory is for cracklab.output.verify to name
             warnings.simplefilter("ignore")
             g = zarr.open_group(str(p), mode="r")
+            attrs = dict(g.attrs)
+            members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
+    except Exception:  # noqa: BLE001 - not a Zarr group
+        return "other", {}
+    if "cracklab_ensemble" in attrs:
+        return "ensemble", attrs
+    if "scene" in attrs or "cracklab_run_format" in attrs:
+        return "run", attrs
+    return ("empty", attrs) if not members else ("other", attrs)
+
+
+def _inspect_url(st) -> tuple[str, dict]:
+    """``inspect`` of a store at a URL (an object store has no empty directories: a
+    prefix with nothing below it is "absent")."""
+    import zarr
+
+    fs, root = st.fs
+    try:
+        entries = fs.ls(root, detail=False, refresh=True)
+    except FileNotFoundError:
+        entries = []
+    except OSError as exc:
+        raise StoreError(st.target, f"cannot be read ({exc})") from None
+    if not entries:
+        return "absent", {}
+    try:
+        text = fs.cat_file(st.key("zarr.json"))
+    except FileNotFoundError:
+        text = None
+    if text is not None:
+        try:
+            json.loads(text)
+        except (ValueError, UnicodeDecodeError) as exc:
+            raise StoreError(st.target, f"its metadata {st.target}/zarr.json is damaged ({exc}); the store cannot "
+                                        f"be identified or resumed: restore it, or delete the store and run "
+                                        f"again") from None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            g = zarr.open_group(st.zarr_store(), mode="r", use_consolidated=False)
             attrs = dict(g.attrs)
             members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
     except Exception:  # noqa: BLE001 - not a Zarr group
@@ -257,24 +290,22 @@ def prepare_resume(path, t_all) -> None:
     """Put the store of a killed run back in shape to continue: snapshot variables at
     their full length (their values past the checkpoint are rewritten as the run goes
     on), without what the end of a run writes (station series, rupture time), without
-    temporary files."""
+    temporary files (``Store.clean``); ``path``: a local path, a URL or a ``Store``."""
     import zarr
 
-    for sub in Path(path).iterdir():       # by name: their metadata may be what a kill damaged
-        if sub.is_dir() and is_final_array(sub.name):
-            shutil.rmtree(sub)
-    # zarr's temporary files of a write the kill interrupted, before zarr lists the hierarchy
-    for tmp in Path(path).rglob("*.partial"):
-        tmp.unlink(missing_ok=True)
-    g = zarr.open_group(str(path), mode="a")
+    st = as_store(path)
+    for name in st.children() or ():       # by name: their metadata may be what a kill damaged
+        if is_final_array(name):
+            st.remove(name)
+    # temporary files of a write the kill interrupted, before zarr lists the hierarchy
+    st.clean()
+    g = zarr.open_group(str(st.path) if st.local else st.zarr_store(), mode="a")
     for name, arr, dims in _t_arrays(g):
         if dims and dims[0] == "t":
             if arr.shape[0] != len(t_all):
                 arr.resize((len(t_all),) + tuple(arr.shape[1:]))
                 if name == "t":
                     arr[:] = t_all
-    for tmp in (Path(path) / GROUP).glob("*.tmp"):
-        tmp.unlink(missing_ok=True)
 
 
 def cut_snapshots(store, nsnap: int) -> None:
@@ -301,17 +332,17 @@ def store_error(path, exc: OSError, doing: str) -> StoreError:
 def read_entry(path, key):
     """One top-level entry of the checkpoint of store ``path`` (e.g. "rupture", "n"),
     reading only the arrays it holds; None without a (readable) checkpoint."""
-    f = Path(path) / GROUP / FILE
-    if not f.exists():
-        return None
     try:
-        with np.load(f, allow_pickle=False) as z:
-            meta = json.loads(z["__meta__"].tobytes().decode())
-            items = meta["state"]["dict"]
-            for _, k, v in items:
-                if k == key:
-                    return _decode(v, z)
-    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError):
+        with as_store(path).checkpoint_file() as f:
+            if f is None:
+                return None
+            with np.load(f, allow_pickle=False) as z:
+                meta = json.loads(z["__meta__"].tobytes().decode())
+                items = meta["state"]["dict"]
+                for _, k, v in items:
+                    if k == key:
+                        return _decode(v, z)
+    except (OSError, ValueError, KeyError, TypeError, zipfile.BadZipFile, EOFError, StoreError):
         return None
     return None
 

@@ -27,7 +27,8 @@ def endpoint(url: str) -> str:
 
 def filesystem(url: str):
     """(fsspec filesystem, path) of ``url``: a fresh instance, so that the credentials are
-    those of the environment now (fsspec caches instances). StoreError for a scheme fsspec
+    those of the environment now (fsspec caches instances), without a listings cache (a
+    key another client wrote or deleted is seen at once). StoreError for a scheme fsspec
     does not know or whose package is not installed."""
     import fsspec
     from fsspec.core import url_to_fs
@@ -39,7 +40,7 @@ def filesystem(url: str):
         raise StoreError(url, f"no fsspec implementation for the scheme '{s}://'; check the URL") from None
     except ImportError as exc:
         raise StoreError(url, f"the scheme '{s}://' needs a package that is not installed ({exc})") from None
-    return url_to_fs(url, skip_instance_cache=True)
+    return url_to_fs(url, skip_instance_cache=True, use_listings_cache=False)
 
 
 def _credentials_hint(url: str) -> str:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import xarray as xr
@@ -157,11 +158,12 @@ def _field(state, name):
 
 
 class SequenceRecorder:
-    """What a sequence run records (module docstring), kept in memory or streamed to a local
-    Zarr store: the rows since the last flush are appended to the store's ``t`` and
-    ``t_station`` variables, the run's and the recorder's state then written as a checkpoint
-    (output/checkpoint.py), so that a killed run resumes from it; the catalogue, the inputs
-    and the attrs are written at the end, the status last."""
+    """What a sequence run records (module docstring), kept in memory or streamed to a Zarr
+    store (``path``: a local directory, or the ``Store`` of a URL): the rows since the last
+    flush are appended to the store's ``t`` and ``t_station`` variables, the run's and the
+    recorder's state then written as a checkpoint (output/checkpoint.py), so that a killed
+    run resumes from it; the catalogue, the inputs and the attrs are written at the end,
+    the status last."""
 
     def __init__(self, scene, path=None):
         seq, grid, rec = scene.sequence, scene.grid, scene.record
@@ -314,7 +316,7 @@ class SequenceRecorder:
     def _mark(self, status, extra=None) -> None:
         import zarr
 
-        zarr.open_group(str(self.path), mode="a").attrs.update({**self.identity(status), **(extra or {})})
+        zarr.open_group(_zarr(self.path), mode="a").attrs.update({**self.identity(status), **(extra or {})})
 
     def get_state(self) -> dict:
         ev = self.events
@@ -366,18 +368,28 @@ class SequenceRecorder:
         checkpoint.remove(self.path)       # before the consolidated metadata: of what is there
         with warnings.catch_warnings():     # zarr: consolidated metadata is not in the v3 spec yet
             warnings.simplefilter("ignore")
-            zarr.consolidate_metadata(str(self.path))
-        return xr.open_zarr(str(self.path))
+            zarr.consolidate_metadata(_zarr(self.path))
+        return xr.open_zarr(_zarr(self.path))
 
 
 #: rows per chunk of the t_station variables of a store
 CHUNK = 4096
 
 
+def _zarr(path):
+    """What zarr is given for the store at ``path`` (a local directory, or a ``Store``)."""
+    return str(path) if isinstance(path, Path) else path.zarr_store()
+
+
+def _exists(path) -> bool:
+    """Whether anything is at ``path`` (a local directory, or a ``Store``)."""
+    return path.exists() if isinstance(path, Path) else path.children() is not None
+
+
 def _write(ds, path, **kw):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")     # zarr v3: no spec yet for consolidated metadata or UTF-32 strings
-        ds.to_zarr(str(path), consolidated=False, write_empty_chunks=True, **kw)
+        ds.to_zarr(_zarr(path), consolidated=False, write_empty_chunks=True, **kw)
 
 
 def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_every=None) -> xr.Dataset:
@@ -385,27 +397,37 @@ def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_
     the fields of ``record.fields`` on (t, x1, x3) at the slow and fast cadences and at each
     event's start and end, the station series and ``max_slip_rate`` (with its place) on
     ``t_station``, the catalogue on ``event`` (``cracklab.analysis.events``). ``store``: a
-    local Zarr path the run streams to, checkpointing as ``simulate``'s ``checkpoint_every``
-    says (N accepted steps, or "60s" of wall time: the default; 0 never); ``resume``:
+    Zarr store the run streams to (a local path or a URL: ``cracklab.output.stores``),
+    checkpointing as ``simulate``'s ``checkpoint_every`` says (N accepted steps, or "60s"
+    of wall time: the default; 0 never); ``resume``:
     continue a killed run from its checkpoint (the same numbers, bit for bit)."""
-    path = None if store is None else checkpoint.local_path(store)
-    if store is not None and path is None:
-        raise InputError("store", "a sequence streams to a local Zarr path for now, got " + repr(store))
+    path = None
+    if store is not None:
+        import os
+
+        from .stores import store_for
+
+        if not isinstance(store, (str, os.PathLike)):
+            raise InputError("store", "a sequence streams to a Zarr store given by its path or URL, got "
+                             + repr(store))
+        target = store_for(store)
+        if not target.checkpoints:
+            raise InputError("store", f"a sequence streams to a store that keeps checkpoints; {target} "
+                                      f"({target.kind}) does not")
+        path = target.path if target.local else target
     rec = SequenceRecorder(scene, path)
     start = None
     if resume and path is not None and _complete(path, rec.digest):
-        return xr.open_zarr(str(path))
-    if resume and path is not None and path.exists():
+        return xr.open_zarr(_zarr(path))
+    if resume and path is not None and _exists(path):
         ck = checkpoint.read(path)
         if ck is not None and ck.get("digest") == rec.digest:
             start = ck
             _cut(path, ck["recorder"]["written"])
             rec.set_state(ck["recorder"])
-    if start is None and path is not None and path.exists():
-        import shutil
-
+    if start is None and path is not None and _exists(path):
         checkpoint.check_writable_target(path)      # a run store (or empty): never another directory
-        shutil.rmtree(path)
+        checkpoint.as_store(path).clear()
     run = SequenceRun(scene, start=None if start is None else start["run"])
     every_n, every_s = checkpoint_policy(checkpoint_every)
     last_ck = time.monotonic()
@@ -433,12 +455,12 @@ def _complete(path, digest) -> bool:
     import zarr
 
     try:
-        attrs = dict(zarr.open_group(str(path), mode="r").attrs)
+        attrs = dict(zarr.open_group(_zarr(path), mode="r").attrs)
     except Exception:  # noqa: BLE001 - absent or not a Zarr group
         return False
     if attrs.get("cracklab_status") != "complete" or attrs.get("cracklab_scene_digest") != digest:
         return False
-    report = verify.check_run(path)
+    report = verify.check_run(path if isinstance(path, Path) else path.tree())
     if not report.ok:
         verify.warn_damaged(path, report, "the sequence is run again from the start")
     return report.ok
@@ -448,7 +470,7 @@ def _cut(path, written) -> None:
     """Shorten the store's t and t_station variables to the rows a checkpoint counted."""
     import zarr
 
-    g = zarr.open_group(str(path), mode="a")
+    g = zarr.open_group(_zarr(path), mode="a")
     for name in list(g.array_keys()):
         arr = g[name]
         dims = getattr(arr.metadata, "dimension_names", None) or ()

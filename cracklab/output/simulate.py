@@ -43,8 +43,8 @@ class Recorder:
     and at checkpoints, and adds the station series and rupture times at the end, then
     (last) ``cracklab_status``. Every array is written with a crc32c checksum per chunk,
     and every chunk of what is written is stored (NaN-only ones too), so that a missing
-    chunk is a sign of damage (``cracklab.output.verify``). ``path`` is the store's local path
-    (None for store objects and URLs: no checkpoints)."""
+    chunk is a sign of damage (``cracklab.output.verify``). ``path`` is where checkpoints go:
+    the store's local path, or its ``Store`` (a URL); None for store objects (no checkpoints)."""
 
     def __init__(self, scene, store, path=None, flush_every=FLUSH):
         self.scene, self.store, self.path, self.flush_every = scene, store, path, flush_every
@@ -281,7 +281,7 @@ def _consolidate(store):
 
 
 def _consolidated(path) -> bool:
-    """Whether the run store at ``path`` has consolidated metadata."""
+    """Whether the run store at ``path`` (a directory, or ``Store.tree()``) has consolidated metadata."""
     from .verify import read_json
 
     doc, _ = read_json(path / "zarr.json")
@@ -324,7 +324,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     snapshots stream to that Zarr store during the run and the result is read back lazily.
     On a blow-up, what was recorded is kept (flushed to the store) and SimulationError raised.
 
-    A run into a local store path checkpoints its full state into the store (docs/guide/reliability.md):
+    A run into a store path or URL checkpoints its full state into the store (docs/guide/reliability.md):
     ``checkpoint_every`` N steps, or ``"60s"`` of wall time (default: every 60 s, at most 10 %
     of the run time), ``0`` never. ``resume=True`` continues a killed run from its last
     checkpoint (same results, bit for bit); with no checkpoint the run starts over, and a
@@ -339,7 +339,7 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
     ``check_disk``: for a store on a local path, bound the bytes the run writes
     (``cracklab.output.disk``) and raise ``DiskBudgetError`` before any step when the
     store's file system cannot hold them. Ctrl-C
-    during a run into a local store stops it after the step in progress, writes a
+    during a run into a store path or URL stops it after the step in progress, writes a
     checkpoint there and raises ``Interrupted`` (its ``step``): a resume continues from it.
     """
     import os
@@ -358,16 +358,17 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
                             checkpoint_every=checkpoint_every)
     every_n, every_s = checkpoint_policy(checkpoint_every)
     adaptive = checkpoint_every is None     # the default: keep checkpoints under 10 % of the time
-    path = target.path if target is not None else None
+    # where checkpoints go: a local store's directory, or the Store itself (a URL)
+    path = None if target is None or not target.checkpoints else target.path if target.local else target
     if resume and path is None:
-        raise InputError("resume", "needs a store path (a local Zarr directory) to resume from")
+        raise InputError("resume", "needs a store to resume from (a local Zarr directory or a URL)")
     if check_memory:
         from ..solver.budget import check_memory as fits, run_memory
 
         fits(run_memory(scene, store=store is not None), what=f"the run of {scene.name!r}",
              hint="make the grid coarser or the run shorter, or run it anyway with check_memory=False "
                   "(cracklab run --no-memory-check)")
-    if check_disk and path is not None:
+    if check_disk and target is not None and target.local:
         holds(output_size(scene), path, what=f"the run of {scene.name!r}",
               hint="record fewer fields, less often (record.every, record.times) or on a region "
                    "(record.region), or write to a larger disk; or run it anyway with check_disk=False "
@@ -384,16 +385,16 @@ def simulate(scene, *, progress=False, store=None, checkpoint_every=None, resume
             from . import verify
 
             if attrs.get("cracklab_status") == "complete":
-                report = verify.check_run(path)
+                report = verify.check_run(target.tree())
                 if report.ok:
-                    if ck is not None or not _consolidated(path):   # killed after the status, before the
-                        checkpoint.remove(path)                      # clean-up and the consolidated metadata
-                        _consolidate(str(path))
-                    return xr.open_zarr(store, consolidated=False)
+                    if ck is not None or not _consolidated(target.tree()):  # killed after the status, before
+                        checkpoint.remove(path)                      # the clean-up and the consolidated metadata
+                        _consolidate(str(path) if target.local else rec.store)
+                    return xr.open_zarr(store if target.local else rec.store, consolidated=False)
                 verify.warn_damaged(path, report, "the run is done again from the start")
                 ck = None
             elif ck is not None:
-                report = verify.check_run(path, snapshots=int(ck["nsnap"]), final=False)
+                report = verify.check_run(target.tree(), snapshots=int(ck["nsnap"]), final=False)
                 if not report.ok:
                     verify.warn_damaged(path, report, f"its checkpoint after step {int(ck['n'])} cannot be resumed "
                                                       f"from: the run is done again from the start")

@@ -99,8 +99,8 @@ class Report:
             return ("rerun the sweep (cracklab sweep STUDY.toml -o STORE): it recomputes the damaged members "
                     "(--no-resume recomputes every member)")
         if is_url(self.store):
-            return ("run it again from its scene file: cracklab run SCENE.toml -o STORE (a store at a URL has no "
-                    "checkpoints: the run starts over and replaces it)")
+            return ("run it again from its scene file: cracklab run SCENE.toml -o STORE (a damaged store at a URL is "
+                    "run again from the start and replaced)")
         if any(d.what.startswith(SCENE_CHANGED) for d in self.damage):
             return ("run it again from its scene file with --resume, which recomputes a damaged store: cracklab run "
                     "SCENE.toml -o STORE --resume (not the store itself: its scene was changed)")

@@ -124,14 +124,14 @@ def test_overwrite_says_it_replaces_only_cracklab_stores(tmp_path):
     assert notes.read_text() == "precious"
 
 
-def test_a_url_store_runs_without_checkpoints_and_never_blames_resume(tmp_path):
+def test_a_url_store_is_checkpointed_and_resumed_like_a_path(tmp_path):
     toml, sc = small_scene(tmp_path)
     url = f"memory://clirun-{os.getpid()}.zarr"
     runner = CliRunner()
     res = runner.invoke(main, ["run", str(toml), "-o", url, "--no-progress"])
     assert res.exit_code == 0, res.output
-    assert "--resume" not in res.output and "is a URL: the run is written there without checkpoints" in res.output
+    assert "without checkpoints" not in res.output
     assert xr.open_zarr(url, consolidated=False).attrs["cracklab_status"] == "complete"
     res = runner.invoke(main, ["run", str(toml), "-o", url, "--resume"])
-    assert res.exit_code == 1 and "--resume: " in res.output and "is a URL" in res.output, res.output
+    assert res.exit_code == 0 and "holds this run, complete (checked); nothing to do" in res.output, res.output
     assert json.loads(xr.open_zarr(url, consolidated=False).attrs["scene"])["name"] == sc.name

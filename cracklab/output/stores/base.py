@@ -2,16 +2,23 @@
 
 A ``Store`` is one place (a local path or a URL) on one kind of storage. It checks the
 place before anything runs (``check``), gives zarr the store object every write of a run
-goes through (``zarr_store``: one seam, where a test injects a fault), and holds a
-sweep's exclusive use of the place (``lock``). Each kind of storage is one subclass in a
-file of its own, chosen from the path or URL by ``cracklab.output.stores.store_for``."""
+goes through (``zarr_store``: one seam, where a test injects a fault), holds a
+sweep's exclusive use of the place (``lock``), and keeps a run's checkpoint
+(``write_checkpoint``, ``checkpoint_file``, ``remove_checkpoint``: committed atomically,
+so that a kill leaves the previous checkpoint or the new one, never a torn one). Each kind
+of storage is one subclass in a file of its own, chosen from the path or URL by
+``cracklab.output.stores.store_for``."""
 from __future__ import annotations
 
 import contextlib
 import os
 from abc import ABC, abstractmethod
 from pathlib import Path
-from typing import ClassVar
+from typing import Callable, ClassVar
+
+#: the group of a run's store that holds its checkpoint (a Zarr group: readers ignore it)
+CHECKPOINT_GROUP = "_checkpoint"
+CHECKPOINT_GROUP_DOC = '{"zarr_format": 3, "node_type": "group", "attributes": {}}'
 
 
 def is_url(store) -> bool:
@@ -35,6 +42,8 @@ class Store(ABC):
     kind: ClassVar[str]
     local: ClassVar[bool] = False
     accepts: ClassVar[str] = ""
+    #: whether runs into this kind of storage checkpoint (and so resume after a kill)
+    checkpoints: ClassVar[bool] = False
 
     def __init__(self, target):
         self.target = os.fspath(target)
@@ -69,3 +78,47 @@ class Store(ABC):
         """A context holding this store for one sweep at a time; yields what holds it
         (None: this kind of storage is not locked)."""
         return contextlib.nullcontext()
+
+    # -- the layout of a run: what the resume of a killed run needs ----------------------
+    def tree(self):
+        """A read-only, path-like view of the store (``/``, ``exists``, ``read_text``,
+        ``subdirs`` or a directory's entries) for ``cracklab.output.verify``."""
+        raise NotImplementedError
+
+    def children(self) -> list[str] | None:
+        """The names right below the store's root (None: nothing is there)."""
+        raise NotImplementedError
+
+    def remove(self, name: str) -> None:
+        """Delete the entry ``name`` right below the store's root, and all it holds."""
+        raise NotImplementedError
+
+    def clear(self) -> None:
+        """Delete the store and all it holds (a run started over)."""
+        raise NotImplementedError
+
+    # -- checkpoints --------------------------------------------------------------------
+    def _no_checkpoints(self):
+        from ...errors import StoreError
+
+        return StoreError(self.target, f"a {self.kind} store keeps no checkpoints: run without resume, or write "
+                                       f"to a local path")
+
+    def write_checkpoint(self, fill: Callable, before_commit: Callable | None = None) -> None:
+        """Write a new checkpoint: ``fill(fh)`` writes its bytes to a binary file; it
+        replaces the previous one atomically (``before_commit()`` runs with the new bytes
+        stored, before they become the checkpoint: a test hook)."""
+        raise self._no_checkpoints()
+
+    def checkpoint_file(self):
+        """A context yielding a local file that holds the store's checkpoint, its
+        integrity checked (None when there is none); a StoreError when it is unreadable."""
+        raise self._no_checkpoints()
+
+    def remove_checkpoint(self) -> None:
+        """Delete the checkpoint (the run is complete)."""
+        raise self._no_checkpoints()
+
+    def clean(self) -> None:
+        """Delete what a killed writer left behind that is no part of the store
+        (temporary files, checkpoint bytes that never became the checkpoint)."""

@@ -8,12 +8,15 @@ import contextlib
 import functools
 import json
 import os
+import shutil
 import socket
 import time
 from pathlib import Path
 
 from ...errors import InputError, StoreError
-from .base import Store
+from .base import CHECKPOINT_GROUP, CHECKPOINT_GROUP_DOC, Store
+
+CHECKPOINT_FILE = "state.npz"
 
 LOCK_NAME = ".cracklab-sweep.lock"
 LOCK_GRACE_S = 10.0     # an empty or unreadable lock younger than this is being written
@@ -29,6 +32,7 @@ class LocalStore(Store):
     kind = "local"
     local = True
     accepts = "local paths"
+    checkpoints = True
 
     @classmethod
     def handles(cls, scheme: str) -> bool:
@@ -54,6 +58,69 @@ class LocalStore(Store):
 
     def lock(self):
         return _lock(self.target)
+
+    # -- the layout of a run --------------------------------------------------------------
+    def tree(self) -> Path:
+        return self.path
+
+    def children(self) -> list[str] | None:
+        try:
+            return sorted(e.name for e in os.scandir(self.path) if e.is_dir())
+        except FileNotFoundError:
+            return None
+
+    def remove(self, name: str) -> None:
+        shutil.rmtree(self.path / name)
+
+    def clear(self) -> None:
+        shutil.rmtree(self.path)
+
+    # -- checkpoints: one file, <store>/_checkpoint/state.npz ---------------------------
+    def write_checkpoint(self, fill, before_commit=None) -> None:
+        """The new checkpoint is written to a temporary file in the same directory,
+        flushed to disk and moved over the previous one (``os.replace``), then the rename
+        itself made durable: a kill leaves the previous checkpoint or the new one."""
+        d = self.path / CHECKPOINT_GROUP
+        d.mkdir(exist_ok=True)
+        if not (d / "zarr.json").exists():
+            # a Zarr group: readers of the store then ignore the directory silently
+            (d / "zarr.json").write_text(CHECKPOINT_GROUP_DOC)
+        tmp = d / f"{CHECKPOINT_FILE}.{os.getpid()}.tmp"
+        try:
+            with open(tmp, "wb") as fh:
+                fill(fh)
+                fh.flush()
+                os.fsync(fh.fileno())
+            if before_commit is not None:
+                before_commit()
+            os.replace(tmp, d / CHECKPOINT_FILE)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        try:  # make the rename itself durable
+            fd = os.open(d, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        except OSError:
+            pass
+
+    @contextlib.contextmanager
+    def checkpoint_file(self):
+        f = self.path / CHECKPOINT_GROUP / CHECKPOINT_FILE
+        yield f if f.exists() else None
+
+    def remove_checkpoint(self) -> None:
+        shutil.rmtree(self.path / CHECKPOINT_GROUP, ignore_errors=True)
+
+    def clean(self) -> None:
+        """zarr's temporary files of a write a kill interrupted (``*.partial``), and the
+        checkpoint's temporary file."""
+        for tmp in self.path.rglob("*.partial"):
+            tmp.unlink(missing_ok=True)
+        for tmp in (self.path / CHECKPOINT_GROUP).glob("*.tmp"):
+            tmp.unlink(missing_ok=True)
 
 
 @functools.cache
@@ -83,7 +150,7 @@ def _zarr_dir():
     return ZarrDir
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -115,7 +182,7 @@ def _lock_is_stale(path: Path, info: dict) -> bool:
             return True
     if info.get("host") == socket.gethostname():
         pid = info.get("pid")
-        return not (isinstance(pid, int) and _pid_alive(pid))
+        return not (isinstance(pid, int) and pid_alive(pid))
     return False        # another host: cannot tell, refuse
 
 
