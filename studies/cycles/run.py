@@ -267,6 +267,19 @@ def _fd_section(res):
                      f"{r['smallest_step']:.2g} s | {r['largest_step'] / YEAR:.2g} yr | {r['steps_in_events']} | "
                      f"{r['time_in_events_s']:.0f} s |")
     lines += ["", "Wall times on a shared 2-core host (other jobs running), not a benchmark.", ""]
+    keys = sorted(fd, key=float, reverse=True)
+    finest = fd[keys[-1]]
+    target = (f"The target, BP1-FD at 25 m in under 15 minutes on one core: "
+              + (f"{finest['wall_s'] / 60:.0f} min here, {'met' if finest['wall_s'] <= 900 else 'not met'}."
+                 if float(keys[-1]) <= 25 else f"25 m not run yet; the finest run, {keys[-1]} m, took "
+                 f"{finest['wall_s'] / 60:.0f} min"))
+    if len(keys) >= 2 and float(keys[-1]) > 25:
+        growth = finest["wall_s"] / fd[keys[-2]]["wall_s"]
+        target += (f", {growth:.1f} times the run at {keys[-2]} m, so 25 m would take about "
+                    f"{finest['wall_s'] * growth ** np.log2(float(keys[-1]) / 25) / 60:.0f} min at that rate: not met. ")
+    lines += [target + "Between events the order-5 pair takes the long steps (`sequence.slow_rate`); in them the "
+              "predictor-corrector's steps are set by the dynamic step and cost one history step each, whose near "
+              "part grows as the nodes over beta (docs/reference/equations.md).", ""]
     for dz, r in fd.items():
         ev = r["events"]
         lines += [f"**BP1-FD, dz = {dz} m**: {len(ev['t_start'])} events in {len(r['earthquakes_yr'])} earthquakes "
