@@ -180,8 +180,6 @@ def inspect(path) -> tuple[str, dict]:
         raise StoreError(path, f"cannot be read ({os.strerror(exc.errno) if exc.errno else exc})") from None
     if not entries:
         return "empty", {}
-    import zarr
-
     meta = p / "zarr.json"
     if meta.exists():
         try:
@@ -189,10 +187,18 @@ def inspect(path) -> tuple[str, dict]:
         except (OSError, ValueError) as exc:
             raise StoreError(path, f"its metadata file {meta} is damaged ({exc}); the store cannot be "
                                    f"identified or resumed: restore the file, or delete the store and run again") from None
+    return _classify(str(p))
+
+
+def _classify(target, **open_kw) -> tuple[str, dict]:
+    """(kind, attrs) of the Zarr group at ``target`` (a path or zarr store): "ensemble", "run",
+    "empty", or "other" (not a Zarr group, or one of something else)."""
+    import zarr
+
     try:
         with warnings.catch_warnings():     # a damaged array directory is for cracklab.output.verify to name
             warnings.simplefilter("ignore")
-            g = zarr.open_group(str(p), mode="r")
+            g = zarr.open_group(target, mode="r", **open_kw)
             attrs = dict(g.attrs)
             members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
     except Exception:  # noqa: BLE001 - not a Zarr group
@@ -207,8 +213,6 @@ def inspect(path) -> tuple[str, dict]:
 def _inspect_url(st) -> tuple[str, dict]:
     """``inspect`` of a store at a URL (an object store has no empty directories: a
     prefix with nothing below it is "absent")."""
-    import zarr
-
     fs, root = st.fs
     try:
         entries = fs.ls(root, detail=False, refresh=True)
@@ -229,19 +233,7 @@ def _inspect_url(st) -> tuple[str, dict]:
             raise StoreError(st.target, f"its metadata {st.target}/zarr.json is damaged ({exc}); the store cannot "
                                         f"be identified or resumed: restore it, or delete the store and run "
                                         f"again") from None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            g = zarr.open_group(st.zarr_store(), mode="r", use_consolidated=False)
-            attrs = dict(g.attrs)
-            members = [k for k in g.array_keys()] + [k for k in g.group_keys() if k != GROUP]
-    except Exception:  # noqa: BLE001 - not a Zarr group
-        return "other", {}
-    if "cracklab_ensemble" in attrs:
-        return "ensemble", attrs
-    if "scene" in attrs or "cracklab_run_format" in attrs:
-        return "run", attrs
-    return ("empty", attrs) if not members else ("other", attrs)
+    return _classify(st.zarr_store(), use_consolidated=False)
 
 
 def check_writable_target(path) -> None:

@@ -109,6 +109,9 @@ def test_of_several_sweeps_taking_over_a_stale_lock_one_wins(s3_env, monkeypatch
     bucket = s3_env.make_bucket()
     url = f"s3://{bucket}/ens.zarr"
     monkeypatch.setattr(fsspecstore, "LOCK_STALE_S", 1.0)
+    # the winner's heartbeat keeps its own lock fresh: a contender that the host's load
+    # delays past LOCK_STALE_S must still find it held, not stale
+    monkeypatch.setattr(fsspecstore, "LOCK_HEARTBEAT_S", 0.2)
     _plant(s3_env, bucket)
     time.sleep(2.5)
     barrier, won, refused = threading.Barrier(4), [], []
