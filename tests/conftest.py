@@ -55,6 +55,7 @@ SLOW = frozenset({
     # big grids
     "tests/solver/test_budget.py::test_the_estimate_agrees_with_the_peak_resident_memory",
     "tests/solver/test_budget.py::test_the_estimate_agrees_with_the_peak_of_a_bimaterial_and_a_rate_state_run",
+    "tests/solver/test_budget.py::test_the_estimate_holds_the_traced_peak_of_a_bimaterial_and_a_rate_state_run",
     # kernel fits and the bimaterial faces' tables, from empty caches
     "tests/solver/test_face_kernels.py::test_exponential_fits_of_the_face_kernels",
     "tests/history/test_fast_engine.py::test_cache_round_trip_and_corruption",

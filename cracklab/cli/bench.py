@@ -163,6 +163,12 @@ STAGES = ("transforms", "advance", "wait", "taps", "law", "glue")
 #: ``ms_per_step``), then timed by stage (``stages_ms``); a block spans every eighth of the
 #: exponential engine's staggered advance
 STAGE_BLOCK = 8
+#: the step timed by stage (``stages_total_ms``, what the stages sum to) against the plain
+#: step (``ms_per_step``): within this fraction on a host that is not overloaded (the
+#: clock's own cost is a few microseconds per wrapped call, tens of calls per step; the
+#: two are different steps of one run, means and medians of a noisy host). ``stages_vs_step``
+#: is the ratio; the text report says when it is outside.
+STAGE_SLACK = 0.25
 
 
 class StageClock:
@@ -252,6 +258,8 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     ``stages_ms``, the mean ms per step of each of STAGES over the steps whose totals are in
     the middle half, ``stages_total_ms`` the mean of those totals (the stages sum to it, and
     it is the plain step's cost plus the clock's own, a few microseconds per wrapped call),
+    ``stages_vs_step`` that total over ``ms_per_step`` (1 within STAGE_SLACK),
+    ``stages_fft_pairs`` each stage in units of the in-run FFT pair (``fft_pair_ms``),
     ``stage_steps`` the steps timed by stage.
     With the overlap (two or more engine threads) the advance on the worker is not in the
     step's stages; the caller's ``wait`` for it is, and ``worker_ms`` is the worker's busy
@@ -310,6 +318,7 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
     stages = stage_breakdown(staged)
     pair_ms = 1e3 * float(np.median(pairs)) if pairs else fft_pair_ms(scene.grid, threads=threads,
                                                                       components=scene.components)
+    staged_total = stage_total(staged)
     return {
         "n1": n1, "n3": n3, "free_surface": bool(free_surface), "bimaterial": bool(bimaterial), "mode": mode,
         "law": law, "formulation": scene.formulation,
@@ -325,7 +334,9 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "fit_steps": max(scene.nsteps, fit_steps or 0),
         "stage_steps": len(staged),
         "stages_ms": stages,
-        "stages_total_ms": stage_total(staged),
+        "stages_total_ms": staged_total,
+        "stages_vs_step": None if staged_total is None else staged_total / ms,
+        "stages_fft_pairs": None if stages is None else {stage: v / pair_ms for stage, v in stages.items()},
         "worker_ms": 1e3 * clock.worker / len(staged) if overlap and staged else None,
         "terms": {name: getattr(ch.engine, "pairs", None) for name, ch in response.channels.items()},
         "fft_backend": backend_name(),
@@ -334,6 +345,35 @@ def run(n1, n3, mode, nsteps, engine="direct", progress=False, threads=1, engine
         "newton_solves_per_point_step": solves,
         "newton_most_evaluations": stepper.lstate.get("newton_most") if evaluations is not None else None,
     }
+
+
+def stage_table(result) -> str:
+    """The text report of where a bench's step goes: a row per stage (ms per step, in units
+    of the in-run FFT pair, share of the step timed by stage), their sum, and that sum set
+    against the plain step (``ms_per_step``) with STAGE_SLACK; with the overlap, the
+    worker's time beside the step. "" for a result without stages."""
+    stages, pair = result.get("stages_ms"), result["fft_pair_ms"]
+    if not stages:
+        return ""
+    total = result["stages_total_ms"]
+    lines = [f"where the time goes, by stage: ms per step (the mean of the {result['stage_steps']} steps timed "
+             f"by stage whose totals are in the middle half)",
+             f"and in units of the in-run FFT pair ({pair:.4g} ms)",
+             f"  {'stage':<12}{'ms':>10}{'x FFT pair':>12}{'share':>9}"]
+    rows = list(stages.items()) + [("sum", total)]
+    for stage, ms in rows:
+        lines.append(f"  {stage:<12}{ms:>10.3f}{ms / pair:>12.2f}{100 * ms / total:>7.1f} %")
+    if result.get("worker_ms") is not None:
+        ms = result["worker_ms"]
+        lines.append(f"  {'(worker)':<12}{ms:>10.3f}{ms / pair:>12.2f}{'-':>7}    the engines' advance, "
+                     f"beside the step")
+    ratio = total / result["ms_per_step"]
+    within = abs(ratio - 1) <= STAGE_SLACK
+    lines.append(f"  the stages sum to {total:.4g} ms, the plain step's median is {result['ms_per_step']:.4g} ms: "
+                 f"{100 * (ratio - 1):+.1f} %, " + (f"within the {100 * STAGE_SLACK:.0f} % slack" if within else
+                                                    f"outside the {100 * STAGE_SLACK:.0f} % slack (a busy host: "
+                                                    f"rerun, or time more --steps)"))
+    return "\n".join(lines)
 
 
 def _middle(rows):

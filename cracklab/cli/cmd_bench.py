@@ -57,7 +57,17 @@ BENCH_FLAGS = {"materials": "--bimaterial", "grid.n1": "--n1", "grid.n3": "--n3"
               help="Also write the result as one JSON object to this file.")
 def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law, free_surface, bimaterial,
           as_json, output) -> None:
-    """Median cost per step (second half of the run), a same-process FFT pair and the step by stage."""
+    """Median cost per step (second half of the run), a same-process FFT pair and the step by stage.
+
+    The step by stage is part of every report: the transforms, the history engines'
+    advance, the wait for the engines' worker (with --engine-threads 2 or more), the taps,
+    the law and the glue (the rest: the scheme's passes, the load, the growth check), each
+    in ms per step and in units of the FFT pair timed in the same run, and their sum set
+    against the plain step's median (within 25 % unless the host is busy). They are timed
+    on blocks of steps that alternate with plain ones, through wrappers set only on those
+    steps: a run outside the bench carries none. With --json: stages_ms, stages_fft_pairs,
+    stages_total_ms, stages_vs_step, worker_ms (docs/studies/performance.md, "Where the
+    time goes, by stage")."""
     from .bench import run as run_bench
     from ..errors import InputError
 
@@ -81,9 +91,13 @@ def bench(n1, n3, mode, nsteps, engine, threads, engine_threads, fit_steps, law,
     if as_json:
         click.echo(json.dumps(result))
     else:
+        from .bench import stage_table
+
+        staged = ("stages_ms", "stages_fft_pairs", "stages_total_ms", "stages_vs_step", "stage_steps", "worker_ms")
         for k, v in result.items():
-            if (k.startswith("newton") or k == "worker_ms") and v is None:
+            if k.startswith("newton") and v is None or k in staged and result["stages_ms"] is not None:
                 continue
-            if k == "stages_ms" and v is not None:
-                v = ", ".join(f"{stage} {ms:.3g}" for stage, ms in v.items())
             click.echo(f"{k:>22}: {v:.4g}" if isinstance(v, float) else f"{k:>22}: {v}")
+        table = stage_table(result)
+        if table:
+            click.echo(table)

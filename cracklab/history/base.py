@@ -7,9 +7,12 @@ The class says, before any is built:
 * ``windowed``: whether it keeps a truncated history (``Numerics.window``);
 * ``flat_cost``: whether its cost per step stays flat as the run goes ("auto" picks the
   first such engine that takes the scene's window);
-* ``memory(scene, kernel, scheme, material)``: (bytes held, extra bytes while it is built
-  or grows) of one engine of a half space of ``material`` serving the channel of
-  ``kernel`` under ``scheme`` (solver/budget.py sums them);
+* ``memory(scene, kernel, scheme, material, shared=False)``: (bytes held, extra bytes
+  while it is built or grows) of one engine of a half space of ``material`` serving the
+  channel of ``kernel`` under ``scheme``, ``shared`` when an engine of the same kernel and
+  material was built before it in the run (what it may take from that one: memoised
+  tables, the start-up weight E_0 of the bimaterial face's coupling channels)
+  (solver/budget.py sums them);
 * ``extra_at_build``: whether that extra comes while the engine is built (beside the
   engines built before it) rather than while its history grows (beside every engine).
 

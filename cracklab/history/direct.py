@@ -49,9 +49,11 @@ class DirectEngine:
     CHUNK = 256             # the growth step of its buffer and weight table (``chunk``)
 
     @classmethod
-    def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
+    def memory(cls, scene, kernel, scheme, material, shared=False) -> tuple[int, int]:
         """(bytes held, extra bytes while it grows) of one direct engine of a half space of
-        ``material`` over a run of ``scene`` (its window's length, if shorter)."""
+        ``material`` over a run of ``scene`` (its window's length, if shorter); ``shared``
+        (ExponentialEngine.memory) changes nothing here: the direct engine keeps its own
+        history and weights."""
         from .tables import max_bytes
 
         grid = scene.grid

@@ -243,9 +243,12 @@ class ExponentialEngine:
     extra_at_build = True   # memory's extra: the exact taps and fits while it is built
 
     @classmethod
-    def memory(cls, scene, kernel, scheme, material) -> tuple[int, int]:
+    def memory(cls, scene, kernel, scheme, material, shared=False) -> tuple[int, int]:
         """(bytes held, extra bytes while it is built) of one exponential engine (numba
-        backend) of a half space of ``material`` over a run of ``scene``."""
+        backend) of a half space of ``material`` over a run of ``scene``; ``shared``: an
+        engine of the same kernel and material is built before it in the run (its exact
+        taps are then that one's, history/tables.py, and so is its start-up weight E_0:
+        the bimaterial face's coupling channels)."""
         grid = scene.grid
         M = modes(grid)
         g, weight = gammas_sample(grid, scene.dt, material.cs)
@@ -256,9 +259,17 @@ class ExponentialEngine:
         long_taps = float(jd[jd > _BLOCK].sum()) * weight          # modes with their own ring
         distinct = min(M, int(np.unique(np.round(g, 12)).size * weight))
         taps = float(jd.sum()) / jd.size * distinct         # exact weights, per distinct gamma
+        product = scheme.rule == "product"
         held = (M * pairs * 8 * 8                 # 4 state arrays, 4 recursion tables (re, im)
                 + M * (2 * _BLOCK * 16 + _BLOCK * 8 + 2 * 8)    # last inputs, tail sums, taps, indices
-                + long_taps * 24 + taps * 8 * (2 if scheme.rule == "product" else 1))
+                + M * 2 * 8                       # gamma and each mode's distinct gamma
+                + long_taps * 24
+                + distinct * pairs * 16 * (2 if product else 1))  # the fit's factors per distinct gamma (and E_0's)
+        if not shared:      # the exact taps (and E_0's), memoised by kernel and gammas
+            held += taps * 8 * (2 if product else 1)
+        if product and not shared:
+            # E_0 as the run goes: powers and ratios per distinct gamma, two buffers per mode
+            held += 2 * distinct * pairs * 16 + 2 * M * 8
         temps = _TAP_TEMPS["product" if scheme.rule == "product" else "other"]
         building = max(distinct * pairs * 16 * 4 + M * 8 * 6 + M * pairs * 8, taps * 8 * temps)
         return int(held), int(building)

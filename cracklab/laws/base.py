@@ -12,7 +12,9 @@ A law is a frozen dataclass of its parameters that derives from :class:`Law`:
   or an (n1, n3) field; "mask": a boolean (n1, n3) field; "scalar": a number; "option":
   anything else); every law has the mask ``bonded`` (points that never move);
 * methods: ``init_state(grid)``, ``update(state, delta, dt, v_prev, t, tau_prev)`` (step
-  (i)) and ``strength(state, t, grid)`` (Eq. 38) to write; ``broken``, ``failed``,
+  (i)) and ``strength(state, t, grid)`` (Eq. 38) to write, and ``state_fields()`` (how
+  many arrays of the grid's size the state holds: the memory estimate's count; none by
+  default) where the law keeps a state; ``broken``, ``failed``,
   ``solve`` (step (v): the shared :func:`cracklab.laws.solve.solve_velocity` unless the
   strength depends on v) and ``applied_strength`` (the strength it applied) have
   defaults, and so has ``check_scene(scene)`` (checks against the load and material when
@@ -164,6 +166,13 @@ class Law:
         """{name: (unit, kind)} of the law's parameters."""
         return {f.name: (f.metadata.get("unit", "1"), f.metadata.get("kind", "option"))
                 for f in dataclasses.fields(cls)}
+
+    def state_fields(self) -> float:
+        """How many float arrays of the grid's size the law's state holds in a run: those of
+        ``init_state`` and the work arrays its steps keep there (the memory estimate,
+        solver/budget.py; checked against the state of real runs in tests/solver/test_budget.py).
+        None by default."""
+        return 0
 
     def broken(self, state):
         """Where the plane has no cohesion left (True: everywhere)."""

@@ -62,6 +62,9 @@ every = 4
             check_parameter(self, "sigma_n", allow_equal=True)
         self.check_normal()
 
+    def state_fields(self) -> float:
+        return self.normal_fields()
+
     def init_state(self, grid):
         return self.normal_state(grid)
 

@@ -92,6 +92,9 @@ fields = ["delta_1", "delta_2", "lambda_max"]
             lam2 = lam2 + self.beta**2 * sum(delta[c] ** 2 for c in shear)
         return np.sqrt(lam2)
 
+    def state_fields(self) -> float:
+        return 1
+
     def init_state(self, grid):
         lam = np.zeros(grid.shape)
         if self.initial_crack is not None:

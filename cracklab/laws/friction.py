@@ -90,6 +90,10 @@ class Friction(Law):
         return None
 
     # -- the regularised normal stress: state, step update, value of a solve
+    def normal_fields(self) -> int:
+        """The arrays of the grid's size :meth:`normal_state` holds (Law.state_fields)."""
+        return 3 if self.regularised else 0
+
     def normal_state(self, grid) -> dict:
         """The state of the regularised normal stress (none without it): sigma* of the step
         and of the last one, and the step's decay factor."""

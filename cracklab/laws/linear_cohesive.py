@@ -65,6 +65,9 @@ every = 4
         check_parameter(self, "tau_c")
         check_parameter(self, "delta_c")
 
+    def state_fields(self) -> float:
+        return 1
+
     def init_state(self, grid):
         dmax = np.zeros(grid.shape)
         if self.initial_crack is not None:

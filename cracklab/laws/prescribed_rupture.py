@@ -87,6 +87,9 @@ centre = [0.5, 0.5]
             raise InputError("law.origin", f"must be [x1, x3] (or [x1] in 2D) of finite numbers, got {origin!r}")
         object.__setattr__(self, "origin", tuple(float(x) for x in origin))
 
+    def state_fields(self) -> float:
+        return 2
+
     def init_state(self, grid):
         x1, x3 = np.meshgrid(grid.x1, grid.x3, indexing="ij")
         r = np.abs(x1 - self.origin[0])

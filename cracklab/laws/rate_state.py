@@ -659,6 +659,17 @@ hypocentre = [19200.0, 9600.0]
         object.__setattr__(self, "_cache", {})
 
     # -- the protocol
+    def state_fields(self) -> float:
+        """psi, V and ln V, the strength, the last step's V, z and its last value (the ageing
+        law; the slip laws: psi's last value), sigma* when regularised, the predictor's two
+        work arrays (where the predictor solves without the traction: the shear product
+        scheme) and, for the ageing law, the compiled pass's flags (a byte a point); the
+        pass's parameters derived from fields (1 / a, dt / L, V0 dt / L, ln 2 V0)."""
+        ageing = self.evolution == "ageing"
+        fields = 4 + (3 if ageing else 2) + self.normal_fields() + 2 + (1 / 8 if ageing else 0)
+        field = {name: np.ndim(getattr(self, name)) > 0 for name in ("a", "L", "V0")}
+        return fields + field["a"] + field["L"] + (field["L"] or field["V0"]) + field["V0"]
+
     def init_state(self, grid):
         """psi (recorded), V and ln V, the strength; the evolution variable z with its value
         at the last step (z = exp((psi - f0) / b) = V0 theta / L for the ageing law, psi

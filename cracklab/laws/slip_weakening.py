@@ -91,6 +91,10 @@ every = 5
                              if np.ndim(self.mu_d) == 0 and np.ndim(self.mu_s) == 0 else
                              "must be <= law.mu_s at every point of the field")
 
+    def state_fields(self) -> float:
+        """The slip, and sigma* when regularised."""
+        return 1 + self.normal_fields()
+
     def init_state(self, grid):
         return {"slip": np.zeros(grid.shape), **self.normal_state(grid)}
 

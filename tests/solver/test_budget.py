@@ -11,9 +11,11 @@ import textwrap
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import cracklab
+from cracklab.laws import LAWS
 from cracklab.errors import MemoryBudgetError
 from cracklab.solver import budget
 
@@ -155,12 +157,114 @@ SCENE_PEAK = textwrap.dedent("""
 def test_the_estimate_agrees_with_the_peak_of_a_bimaterial_and_a_rate_state_run(builder, dx, t_end):
     """TPV6 (two materials: each face's five engines of its own material, 320 x 161) and
     TPV101 (rate and state, product scheme, 576 x 288), exponential engine: within a factor
-    1.5 of the peak a run adds to the interpreter's (measured: 1.15 and 1.13). The engines
+    1.5 of the peak a run adds to the interpreter's (measured: 1.25 and 1.25; the resident
+    peak varies from run to run by 20 %: the traced test below is the closer one). The engines
     are built one after another, so the set-up's peak is one engine's temporaries beside
     the engines built before it: for TPV6 less than the largest engine's temporaries on top
     of all ten (as the estimate had it, 1.23), and more work arrays (the faces' compiled
     passes hold 56 spectra and 54 real rows per mode)."""
     _within_half_of_the_peak(SCENE_PEAK, builder, dx, t_end)
+
+
+TRACED = textwrap.dedent("""
+    import json, sys, tracemalloc
+    from cracklab.cli.bench import bench_scene
+    from cracklab.solver.budget import run_memory
+    from cracklab.solver.stepper import Stepper
+
+    n, law, bimaterial, steps = int(sys.argv[1]), sys.argv[2], sys.argv[3] == "1", int(sys.argv[4])
+    kw = dict(mode="shear", law=law, bimaterial=bimaterial, engine="exponential")
+    for _ in Stepper(bench_scene(32, 32, nsteps=12, **kw)):    # compiled loops, FFTW, fits
+        pass
+    scene = bench_scene(n, n, nsteps=steps, **kw)
+    est = run_memory(scene)
+    tracemalloc.start()
+    stepper = Stepper(scene)
+    setup = tracemalloc.get_traced_memory()[1]      # the engines built, their temporaries freed
+    tracemalloc.reset_peak()
+    for _ in stepper:
+        pass
+    stepping = tracemalloc.get_traced_memory()[1]
+    print(json.dumps({"steady": est.history + est.work + est.records, "total": est.total,
+                      "stepping": stepping, "peak": max(setup, stepping)}))
+""")
+
+
+@pytest.mark.parametrize("law, bimaterial", [("slip_weakening", True), ("rate_state", False)])
+def test_the_estimate_holds_the_traced_peak_of_a_bimaterial_and_a_rate_state_run(law, bimaterial):
+    """Every array a run allocates (tracemalloc: numpy's allocations, not the interpreter's
+    own memory nor the allocator's pages, so no noise of the host), for the bench's 3D
+    shear ruptures on 128 x 128 over 60 steps: a bimaterial pair with slip weakening (ten
+    engines, the faces' passes) and rate and state (the ageing law's state). The arrays
+    held while stepping (history, work arrays, records) are estimated within -5 %/+25 %
+    of the stepping's traced peak (measured 0.99 and 1.00; the estimate before it counted
+    the product rule's start-up weights E_0, the fits' factors per distinct gamma and the
+    law's state fields: 0.90 and 0.85), and the estimate's total (the set-up's temporaries
+    included) is never under the run's traced peak and at most 1.5 times it (measured
+    1.08 and 1.18; before: 0.99, under the peak, for the bimaterial run)."""
+    res = subprocess.run([sys.executable, "-c", TRACED, "128", law, "1" if bimaterial else "0", "60"], cwd=ROOT,
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    m = json.loads(res.stdout.strip().splitlines()[-1])
+    assert m["stepping"] > 20 << 20, m          # the run's arrays, not the interpreter's objects
+    assert 0.95 < m["steady"] / m["stepping"] < 1.25, m
+    assert 1.0 <= m["total"] / m["peak"] < 1.5, m
+
+
+def _arrays(x):
+    if isinstance(x, np.ndarray):
+        yield x
+    elif isinstance(x, dict):
+        for v in x.values():
+            yield from _arrays(v)
+    elif isinstance(x, (list, tuple)):
+        for v in x:
+            yield from _arrays(v)
+
+
+LAW_VARIANTS = [(kind, {}) for kind in sorted(LAWS)] + [
+    ("slip_weakening", {"normal_time": 1e-3, "sigma_n": None}),      # sigma*: three more fields
+    ("rate_state", {"evolution": "slip"}),
+    ("rate_state", {"a": "field", "L": "field"}),                    # 1 / a, dt / L, V0 dt / L
+    ("rate_state", {"V0": "field", "normal_slip_scale": 1e-3, "sigma_n": None}),
+]
+
+
+@pytest.mark.parametrize("kind, change", LAW_VARIANTS)
+def test_the_estimate_counts_the_law_state(kind, change):
+    """Law.state_fields, which the estimate counts, is what the law's state holds after a
+    few steps of its example scene (its init_state, the work arrays its steps keep there,
+    and the pass's parameters a law derives from its fields), in arrays of the grid's size."""
+    import dataclasses
+    import math
+
+    from cracklab.solver.stepper import Stepper
+
+    scene = cracklab.Scene.from_toml(LAWS[kind].example)
+    if change:
+        law = scene.law
+        values = {k: (np.full(scene.grid.shape, float(np.mean(getattr(law, k)))) if v == "field" else v)
+                  for k, v in change.items()}
+        # without sigma_n the strength follows the normal traction: the opening component runs
+        loading = dataclasses.replace(scene.loading, tau0_2=-law.sigma_n) if "sigma_n" in change else scene.loading
+        scene = scene.replace(law=dataclasses.replace(law, **values), loading=loading)
+    stepper = Stepper(scene)
+    for n, _ in enumerate(stepper):
+        if n == 4:
+            break
+    N = math.prod(scene.grid.shape)
+    held = {id(a): a for a in _arrays(stepper.lstate)}
+    params = [v for v in vars(scene.law).values() if isinstance(v, np.ndarray)]
+    for a in _arrays(list(getattr(scene.law, "_cache", {}).values())):
+        if a.size == N and not any(np.shares_memory(a, p) for p in params):
+            held[id(a)] = a
+    # the rate-and-state predictor's work arrays (and the ageing law's flags), counted
+    # always, are not made where the predictor solves for the traction too (the strength
+    # following the normal traction)
+    unused = 0.0
+    if kind == "rate_state" and "work" not in stepper.lstate:
+        unused = 2 + (1 / 8 if scene.law.evolution == "ageing" else 0)
+    assert scene.law.state_fields() == sum(a.nbytes for a in held.values()) / (N * 8) + unused
 
 
 def test_the_set_up_peak_follows_the_engines_build_order():
@@ -180,8 +284,11 @@ def test_the_set_up_peak_follows_the_engines_build_order():
     two = bench_scene(32, 32, "shear", 10, engine="exponential", bimaterial=True)
     for order in (1, -1):      # the compliant side (more taps: larger temporaries) built last, then first
         scene = two.replace(materials=two.materials[::order])
-        sizes = [exp.memory(scene, k, scheme_of(scene.formulation), mat)
-                 for k, mat in Bimaterial.engine_channels(scene)]
+        channels = Bimaterial.engine_channels(scene)
+        # the second coupling channel of a face shares the first's taps and start-up weight
+        sizes = [exp.memory(scene, k, scheme_of(scene.formulation), mat, shared=(k, mat) in channels[:i])
+                 for i, (k, mat) in enumerate(channels)]
+        assert sum((k, mat) in channels[:i] for i, (k, mat) in enumerate(channels)) == 2
         held = np.cumsum([h for h, _ in sizes])
         est = budget.run_memory(scene)
         assert est.history == held[-1]

@@ -114,12 +114,12 @@ class Bimaterial(Interface):
     def mode_arrays(cls, scene) -> tuple:
         """Spectra: the compiled passes' rows (BOUND_ROWS, both faces' five channels
         whatever parts are active), each channel's f of a face (Face._F), the zero spectrum
-        and the FFT buffers; real: the passes' rows, each channel's static, pre and K terms
-        and its engine's two start-up weights, q, k1/q, k3/q."""
+        and the FFT buffers; real: the passes' rows, each channel's static, pre and K terms,
+        q, k1/q, k3/q (the engines' start-up weights are in the engines' memory)."""
         inplane, transverse = _parts(scene.grid.plane, scene.components)
         channels = 2 * ((4 if inplane else 0) + (1 if transverse else 0))
         spectra, reals = cls.BOUND_ROWS
-        return spectra + channels + 3, reals + 5 * channels + 3
+        return spectra + channels + 3, reals + 3 * channels + 3
 
     def __init__(self, top, bottom, grid, dt, components, *, formulation="product", engine="direct", window=None,
                  transforms=None, nsteps=None, threads=None, rule=None):
