@@ -103,6 +103,12 @@ class FullyDynamic(QuasiDynamic):
             return super().elastic(delta)
         return self.response.traction(delta, self.v_end)
 
+    def stage(self, dt, rates) -> None:
+        """Before a stage ``dt`` into a step of a pair: the history prepared for a step of dt,
+        the end's slip rate in its newest piece that of the previous stage's ``rates``."""
+        self.response.prepare(dt)
+        self.v_end = self.rate_fields(rates)
+
     def advance(self, y, f_a, f_b, h):
         """y after a step of ``h`` from ``y`` with the rates ``f_a`` at its start and ``f_b``
         at its end: slip by the trapezoid, the state exactly at the constant slip rate

@@ -54,8 +54,7 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
     them).
     A step that misses the tolerance at ``control.dt_min`` raises SimulationError naming
     the time, the unknown and its values."""
-    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
-    b, e = np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+    A, b, e = tableau(pair)
     t, y = float(t0), np.array(y0, dtype=float)
     h = float(dt or control.dt_first)
     k = np.empty((pair.stages, y.size))     # the stages' rates, a row each: a stage's sum is one product
@@ -65,7 +64,7 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
         rejected, split = 0, False
         while True:
             step, last = end_step(t, t_end, h, control.dt_min, split)
-            y_new, err, ok = _try(system, pair, A, b, e, k, t, y, step)
+            y_new, err, ok = try_step(system, pair, A, b, e, k, t, y, step)
             size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
             if size <= 1.0:
                 break
@@ -86,11 +85,20 @@ def integrate(system, y0, t0, t_end, pair, control, *, dt=None, n0=0, rates=None
         h = h_next
 
 
-def _try(system, pair, A, b, e, k, t, y, h):
-    """(y_new, error estimate, whether every stage gave finite rates) of one step of ``h``."""
+def tableau(pair):
+    """(A rows, b, e) of ``pair`` as arrays: row i of A holds the weights of stages 0 .. i - 1."""
+    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
+    return A, np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+
+
+def try_step(system, pair, A, b, e, k, t, y, h):
+    """(y_new, error estimate, whether every stage gave finite rates) of one step of ``h``
+    from ``y`` with the rates ``k[0]`` there; each stage i is announced to the system
+    (``system.stage``: c_i h into the step, the rates of stage i - 1) before its rates."""
     try:
         for i in range(1, pair.stages):
             yi = y + h * (A[i] @ k[:i])
+            system.stage(pair.c[i] * h, k[i - 1])
             k[i] = system.rates(t + pair.c[i] * h, yi)
         y_new = yi if pair.fsal else y + h * (b @ k)
         err = h * (e @ k)

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import SimulationError
-from .integrate import Accepted, end_step, error_norm, place
+from .integrate import Accepted, end_step, error_norm, place, tableau, try_step
 
 ORDER = 2
 
@@ -50,15 +50,15 @@ def integrate_dynamic(system, y0, t0, t_end, control, *, dt=None, n0=0, rates=No
         f = np.array(rates, dtype=float)
     n = n0
     floor = control.dt_min * (1 + 1e-12)
-    tableau = None if pair is None else _tableau(pair)
+    tab = None if pair is None else tableau(pair)
     k = None if pair is None else np.empty((pair.stages, y.size))
     while t < t_end:
         rejected, split = 0, False
-        slow = tableau is not None and h >= SLOW_STEPS * control.dt_min and _slow(system, f, slow_rate)
+        slow = tab is not None and h >= SLOW_STEPS * control.dt_min and _slow(system, f, slow_rate)
         while True:
             step, last = end_step(t, t_end, h, control.dt_min, split)
             if slow:
-                y_new, f_new, err, ok = _try_pair(system, pair, tableau, k, t, y, f, step)
+                y_new, f_new, err, ok = _try_pair(system, pair, tab, k, t, y, f, step)
             else:
                 y_new, f_new, err, ok = _try(system, t, y, f, step)
             size, where = error_norm(system, y_new, err, control.tolerance) if ok else (np.inf, -1)
@@ -101,37 +101,23 @@ def _slow(system, f, slow_rate) -> bool:
     return bool(speed.size == 0 or speed.max() < slow_rate)
 
 
-def _tableau(pair):
-    """(A rows, b, e) of ``pair`` as arrays."""
-    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
-    return A, np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
-
-
-def _try_pair(system, pair, tableau, k, t, y, f, h):
-    """(y', f', error estimate, whether the rates stayed finite) of one step of ``pair``:
-    stage i at t + c_i h with the history prepared for c_i h, the end's slip rate of
-    stage i - 1 (the newest piece's), and f' at (t + h, y') with the history prepared for h
-    (what :meth:`DynamicResponse.commit` then pushes)."""
-    A, b, e = tableau
+def _try_pair(system, pair, tab, k, t, y, f, h):
+    """(y', f', error estimate, whether the rates stayed finite) of one step of ``pair``
+    (integrate.try_step, each stage preparing the history: ``FullyDynamic.stage``), f' at
+    (t + h, y') with the history prepared for h (what :meth:`DynamicResponse.commit` then pushes)."""
     k[0] = f
+    y_new, err, ok = try_step(system, pair, *tab, k, t, y, h)
+    if not ok:
+        return y, f, err, False
     try:
-        for i in range(1, pair.stages):
-            yi = y + h * (A[i] @ k[:i])
-            system.response.prepare(pair.c[i] * h)
-            system.v_end = system.rate_fields(k[i - 1])
-            k[i] = system.rates(t + pair.c[i] * h, yi)
-        if pair.fsal and pair.c[-1] == 1.0:
-            y_new, f_new = yi, k[-1].copy()
+        if pair.fsal:
+            f_new = k[-1].copy()
         else:
-            y_new = y + h * (b @ k)
-            system.response.prepare(h)
-            system.v_end = system.rate_fields(k[-1])
+            system.stage(h, k[-1])
             f_new = system.rates(t + h, y_new)
-        err = h * (e @ k)
     except (SimulationError, FloatingPointError):
         return y, f, np.full_like(y, np.nan), False
-    ok = bool(np.all(np.isfinite(y_new)) and np.all(np.isfinite(f_new)))
-    return y_new, f_new, err, ok
+    return y_new, f_new, err, bool(np.all(np.isfinite(f_new)))
 
 
 def _failure(system, t, h, y_new, f_new) -> str:

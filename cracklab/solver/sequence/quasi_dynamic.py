@@ -83,6 +83,10 @@ class QuasiDynamic:
         """{component: F} of the slip fields ``delta``: the static response."""
         return self.static.traction(delta)
 
+    def stage(self, dt, rates) -> None:
+        """Before a stage ``dt`` into a step, the previous stage's rates ``rates``: nothing for
+        the static response (dynamic.py prepares its history here)."""
+
     def rates(self, t, y):
         """dy/dt at (t, y); keeps (V, tau, v) of the evaluation in ``last``."""
         delta, psi = self.split(y)
