@@ -181,13 +181,14 @@ def _check_even(scene, creep) -> None:
     """With ``sequence.mirror``: every field of the scene even about x1 = 0, or one error naming the first that is not."""
     from ..solver.sequence.mirror import mirror_index
 
-    law, shape = scene.law, scene.grid.shape
+    from ..laws import law_parameters
+
+    shape = scene.grid.shape
     image = mirror_index(shape)
     fields = [("sequence.creep", creep)]
-    fields += [(f"law.{name}", getattr(law, name)) for name in ("a", "b", "L", "V0", "f0", "sigma_n", "V_ini", "bonded")
-               if getattr(law, name, None) is not None]
+    fields += [(f"law.{name}", value) for name, value in law_parameters(scene.law).items() if np.ndim(value) > 0]
     fields += [(f"loading.tau0_{c}", scene.loading.field(c)) for c in (1, 2, 3)]
-    for name, value in fields:
+    for name, value in fields:       # a number is even: only the fields over the grid are looked at
         arr = np.broadcast_to(np.asarray(value), shape).ravel()
         if not np.array_equal(arr, arr[image]):
             bad = int(np.flatnonzero(arr != arr[image])[0])
