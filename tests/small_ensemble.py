@@ -12,6 +12,24 @@ SWEEP = E.Sweep(product={"p": [1.0, 2.0, 3.0]},
                 base={"record.every": 2, "record.stations": {"c": [0.5, 0.5]}})
 
 
+#: a study file of two cracks (n = 16, t_end = 0.05), for sweeps through the command line (the
+#: object-store tests: tests/output/test_object_store_input.py, test_object_store_lock.py,
+#: tests/ensemble/test_object_store_members.py)
+STUDY = """
+[study]
+name = "s3"
+builder = "elliptical_crack"
+[base]
+n = 16
+a = 0.25
+b = 0.2
+t_end = 0.05
+record.every = 2
+[sweep]
+p = [1.0, 1.2]
+"""
+
+
 def sweep(store, **kw):
     return E.run(BUILDER, SWEEP, store, scheduler="synchronous", progress=False, **kw)
 

@@ -13,20 +13,7 @@ from click.testing import CliRunner
 from cracklab.cli import main
 from cracklab.ensemble import member_status
 from cracklab.ensemble.store import is_complete
-
-STUDY = """
-[study]
-name = "s3"
-builder = "elliptical_crack"
-[base]
-n = 16
-a = 0.25
-b = 0.2
-t_end = 0.05
-record.every = 2
-[sweep]
-p = [1.0, 1.2]
-"""
+from small_ensemble import STUDY
 
 SIM = importlib.import_module("cracklab.output.simulate")
 

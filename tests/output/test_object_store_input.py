@@ -16,20 +16,7 @@ import cracklab
 from cracklab import Record
 from cracklab.cli import main
 from cracklab.errors import StoreError
-
-STUDY = """
-[study]
-name = "s3"
-builder = "elliptical_crack"
-[base]
-n = 16
-a = 0.25
-b = 0.2
-t_end = 0.05
-record.every = 2
-[sweep]
-p = [1.0, 1.2]
-"""
+from small_ensemble import STUDY
 
 
 def _run_args(url):

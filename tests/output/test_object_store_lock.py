@@ -16,7 +16,8 @@ from click.testing import CliRunner
 
 from cracklab.cli import main
 from cracklab.output.stores import StoreLocked, fsspecstore, store_for
-from test_object_store_input import STUDY, one_error_line
+from small_ensemble import STUDY
+from test_object_store_input import one_error_line
 
 LOCK = ".cracklab-sweep.lock"
 

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import xarray as xr
 
+from same_output import assert_same_run
 from spring_slider import scene as spring_slider
 
 
@@ -31,18 +32,6 @@ def _checkpoint_n(out):
     return None if ck is None else int(ck["run"]["n"])
 
 
-def _same(a, b):
-    assert set(a.variables) == set(b.variables)
-    for name in a.variables:
-        x, y = a[name].values, b[name].values
-        assert x.shape == y.shape, name
-        if x.dtype.kind == "f":
-            assert np.array_equal(x, y, equal_nan=True), name
-        else:
-            assert (x == y).all(), name
-    assert a.attrs["accepted_steps"] == b.attrs["accepted_steps"]
-
-
 def test_the_store_holds_the_in_memory_run_and_verifies(tmp_path):
     import shutil
 
@@ -51,7 +40,7 @@ def test_the_store_holds_the_in_memory_run_and_verifies(tmp_path):
 
     scene = spring_slider(4e8)
     store = tmp_path / "s.zarr"
-    _same(cracklab.simulate(scene, store=store, checkpoint_every=100).load(), cracklab.simulate(scene))
+    assert_same_run(cracklab.simulate(scene, store=store, checkpoint_every=100).load(), cracklab.simulate(scene))
     report = verify(store)
     assert report.ok and report.chunks > 100, report.first()
     shutil.rmtree(store / "max_slip_rate" / "c")           # a lost array's chunks are damage
@@ -96,11 +85,11 @@ def _kill_and_resume(tmp_path, scene, every):
     assert f"resumed after accepted step {last}," in (outs + err).decode()     # not started over
     res = xr.open_zarr(out).load()
     assert res.attrs["cracklab_resumed_from"] == last
-    _same(res, ref)
+    assert_same_run(res, ref)
     # a complete store of the scene is served as it is, not run again
     proc = _start(toml, out, "--resume")
     outs, err = proc.communicate(timeout=300)
     assert proc.returncode == 0 and "nothing to do" in (outs + err).decode(), err.decode()[-2000:]
     served = xr.open_zarr(out).load()
     assert served.attrs["cracklab_resumed_from"] == last          # the same store: not run again
-    _same(served, ref)
+    assert_same_run(served, ref)
