@@ -65,7 +65,9 @@ def _outcome(sc, first, wall, result=None) -> str:
         return (f"complete: {'resumed after accepted step %d, ' % resumed if resumed is not None else ''}"
                 f"{result.attrs['accepted_steps']} accepted steps of {result.attrs['smallest_step']:.3g} to "
                 f"{result.attrs['largest_step']:.3g}{unit} (t = {sc.t_end:.4g}{unit} simulated), "
-                f"{result.sizes.get('event', 0)} events, in {fmt_time(wall)} wall")
+                f"{result.sizes.get('event', 0)} events, in {fmt_time(wall)} wall"
+                + (f" ({fmt_time(result.attrs['wall_time_in_events'])} of it stepping in events)"
+                   if "wall_time_in_events" in result.attrs else ""))
     if first:
         return (f"complete: resumed from step {first}, ran steps {first + 1} to {sc.nsteps} ({_when(sc, first)} "
                 f"to {_when(sc, sc.nsteps)[4:]} simulated) in {fmt_time(wall)} wall")

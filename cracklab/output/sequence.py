@@ -181,6 +181,9 @@ class SequenceRecorder:
         self.series = {f: [] for f in self.station_fields}
         self.next_snapshot = 0.0
         self.smallest, self.largest = math.inf, 0.0
+        # wall-clock seconds spent stepping in events and between them (a resume adds to them)
+        self.wall = {"fast": 0.0, "slow": 0.0}
+        self._clock = None
         self.written = {"t": 0, "t_station": 0}     # rows in the store
         # the scene as attrs and input arrays, and its digest, serialised once per run
         self.scene_json, self.inputs = scene_to_json(scene)
@@ -204,6 +207,10 @@ class SequenceRecorder:
                 x = _field(state, f)
                 self.series[f].append([x[i, j] for i, j in self.nodes.values()])
         in_event = self.events.current is not None
+        now = time.perf_counter()
+        if self._clock is not None:
+            self.wall["fast" if in_event or change is not None else "slow"] += now - self._clock
+        self._clock = now
         if self.fields and (state.t >= self.next_snapshot or change is not None or end):
             self.snaps.append({f: _field(state, f)[self.s1, self.s3].copy() for f in self.fields})
             self.snap_t.append(state.t)
@@ -274,7 +281,8 @@ class SequenceRecorder:
         ds.attrs = {"Conventions": "CF-1.10", "title": f"cracklab sequence: {scene.name}",
                     "source": f"cracklab {__version__}", "cracklab_version": __version__, "scene": self.scene_json,
                     "event_threshold": scene.sequence.event_threshold, "accepted_steps": int(steps),
-                    "smallest_step": self.smallest, "largest_step": self.largest}
+                    "smallest_step": self.smallest, "largest_step": self.largest,
+                    "wall_time_in_events": self.wall["fast"], "wall_time_between_events": self.wall["slow"]}
         return ds
 
     def _clear(self):
@@ -321,13 +329,14 @@ class SequenceRecorder:
     def get_state(self) -> dict:
         ev = self.events
         return {"written": dict(self.written), "next_snapshot": self.next_snapshot, "smallest": self.smallest,
-                "largest": self.largest, "rows": ev.rows, "current": ev.current, "window": ev.window,
+                "largest": self.largest, "wall": dict(self.wall), "rows": ev.rows, "current": ev.current, "window": ev.window,
                 "prev": ev.prev}
 
     def set_state(self, state) -> None:
         self.written = {k: int(v) for k, v in state["written"].items()}
         self.next_snapshot, self.smallest, self.largest = (float(state[k]) for k in ("next_snapshot", "smallest",
                                                                                       "largest"))
+        self.wall = {k: float(v) for k, v in state.get("wall", self.wall).items()}
         ev = self.events
         ev.rows, ev.window, ev.prev = state["rows"], [tuple(w) for w in state["window"]], \
             None if state["prev"] is None else tuple(state["prev"])

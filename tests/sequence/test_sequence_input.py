@@ -127,3 +127,20 @@ def test_cracklab_run_of_a_sequence_scene_reports_its_steps_and_events(tmp_path)
     assert "accepted steps of" in res.stdout + res.stderr and "1 events" in res.stdout + res.stderr
     ds = xr.open_zarr(tmp_path / "slider.zarr")
     assert ds.sizes["event"] == 1 and ds.attrs["accepted_steps"] > 100
+
+
+def test_a_sequence_reports_its_wall_time_in_events_and_between_them():
+    """The recorder adds each accepted step's wall time to the phase it was taken in: both
+    phases counted, their sum within the run's own wall time (which adds the set-up and
+    the end: a large part of so short a run)."""
+    import time
+
+    from cracklab.output.sequence import run_sequence
+
+    scene = spring_slider(4e8)
+    t0 = time.perf_counter()
+    ds = run_sequence(scene)
+    wall = time.perf_counter() - t0
+    fast, slow = ds.attrs["wall_time_in_events"], ds.attrs["wall_time_between_events"]
+    assert ds.sizes["event"] == 1 and fast > 0 and slow > 0
+    assert 0.2 * wall < fast + slow <= wall, (fast, slow, wall)
