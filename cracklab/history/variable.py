@@ -130,6 +130,10 @@ class VariableHistory:
         self.SR = np.zeros((M, P), dtype=complex)
         self.SI = np.zeros((M, P), dtype=complex)
         self._prep = None
+        # the prepared states, reused from step to step (prepare writes them, commit reads them)
+        self._kR = np.empty((M, P), dtype=complex)
+        self._kI = np.empty((M, P), dtype=complex)
+        self._sB = np.empty((M, P), dtype=complex)
         self.last_h, self.run = None, 0     # the last step committed, and how many in a row were it
         self._cache = None                  # the weights of a run of equal steps (h, arrays)
 
@@ -151,9 +155,7 @@ class VariableHistory:
         cache = self._uniform(h)
         A = np.zeros(M, dtype=complex)
         B = np.zeros(M)
-        kR = np.empty((M, P), dtype=complex)
-        kI = np.empty((M, P), dtype=complex)
-        sB = np.empty((M, P), dtype=complex)
+        kR, kI, sB = self._kR, self._kI, self._sB
         _prepare(self.r, self.lam, self.coef, self.near.p0, self.near.p00, self.near.half, self.T0,
                  self.ring, self.off, self.cap, self.hring, self.hcap, self.first, self.n, h,
                  self.SR, self.SI, A, B, kR, kI, sB, cache is not None, self.run, *(cache or self._NONE))
@@ -187,8 +189,7 @@ class VariableHistory:
             raise RuntimeError("prepare(h) first")
         h, kR, kI, sB = self._prep
         V = np.ascontiguousarray(V, dtype=complex)
-        self.SR = kR + sB * V.real[:, None]
-        self.SI = kI + sB * V.imag[:, None]
+        _advance(kR, kI, sB, V, self.SR, self.SI)
         self.hring[self.n % self.hcap] = h
         self.run = self.run + 1 if h == self.last_h else 1
         self.last_h = h
@@ -251,6 +252,18 @@ def _phi(z):
                 0.5 + z / 3.0 + z2 / 8.0 + z2 * z / 30.0 + z2 * z2 / 144.0)
     e = np.exp(z)
     return (e - 1.0) / z, (e * (z - 1.0) + 1.0) / (z * z)
+
+
+@njit()
+def _advance(kR, kI, sB, V, SR, SI):
+    """The states at the step's end, in place: S = k + sB V (Re V into SR, Im V into SI)."""
+    M, P = SR.shape
+    for k in range(M):
+        vr = V[k].real
+        vi = V[k].imag
+        for p in range(P):
+            SR[k, p] = kR[k, p] + sB[k, p] * vr
+            SI[k, p] = kI[k, p] + sB[k, p] * vi
 
 
 @njit()
