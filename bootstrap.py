@@ -2,7 +2,7 @@
 """Set up the project's virtual environment and run a command in it (stdlib only).
 
 Usage:
-    python3 bootstrap.py test [pytest args...]   # default pytest args: -n 2
+    python3 bootstrap.py test [pytest args...]   # default pytest args: -n 2 --durations=30
     python3 bootstrap.py demo [demo args...]     # runs `cracklab demo ...`
     python3 bootstrap.py docs [sphinx args...]   # builds the site into docs/_build/html
 
@@ -121,7 +121,7 @@ def main(args: list[str]) -> None:
 
     if command == "test":
         say("running tests")
-        pytest_args = extra if extra else ["-n", "2"]
+        pytest_args = extra if extra else ["-n", "2", "--durations=30"]   # the slowest, for the CI budget
         exec_in_venv([str(VENV_PYTHON), "-m", "pytest", *pytest_args])
     elif command == "demo":
         say("running demo")
