@@ -6,10 +6,12 @@ import sys
 
 import click
 
+from ..ensemble.clusters import KINDS
 from .common import CONTEXT, disk_line, fmt_time, exit_interrupted, load_toml, fail, main
 
 
-SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"}
+SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers", "cluster": "--cluster",
+               "cluster_options": "--cluster-option"}
 
 
 @main.command(context_settings=CONTEXT)
@@ -19,9 +21,18 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Address of a running dask scheduler (default: env DASK_SCHEDULER_ADDRESS, "
                    "else an embedded LocalCluster); one that cannot be reached within 5 s is an error.")
+@click.option("--cluster", type=click.Choice(list(KINDS), case_sensitive=False), default=None,
+              help="Run the workers as batch jobs of this system (dask-jobqueue), submitted from here and "
+                   "cancelled at the end; OUTPUT must be reachable from the nodes (an object store URL, or "
+                   "a shared file system). See docs/guide/cluster.md.")
+@click.option("--cluster-option", "cluster_options", multiple=True, metavar="KEY=VALUE",
+              help="An option of the --cluster jobs (repeatable): queue, account, walltime, memory, cores, "
+                   "processes, job_extra_directives, ... (dask-jobqueue's names; over dask's jobqueue "
+                   "configuration). Default: one core and one worker per job, memory for the largest member.")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Worker processes of the embedded LocalCluster (default: one per core, as many as "
-                   "the memory holds).")
+                   "the memory holds), or with --cluster of the batch jobs in all (default: one per member "
+                   "to run).")
 @click.option("--resume/--no-resume", default=True, show_default=True,
               help="Skip members already complete in OUTPUT.")
 @click.option("--overwrite", is_flag=True,
@@ -41,7 +52,7 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
               help="Import this Python module first (repeatable): a module of yours that registers "
                    "scene builders with cracklab.register_builder. A study file itself never imports "
                    "code: it names only registered builders.")
-def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no_memory_check, no_disk_check, allow,
+def sweep(study: str, output, scheduler, cluster, cluster_options, workers, resume, overwrite, dry_run, no_memory_check, no_disk_check, allow,
           progress, imports) -> None:
     """Run the ensemble of STUDY (a STUDY.toml, see docs/guide/ensembles.md) into OUTPUT.
 
@@ -54,6 +65,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
     import importlib
 
     from ..ensemble import load_study, run_study
+    from ..ensemble.clusters import parse_options
     from ..errors import InputError, StoreError
 
     for module in imports:
@@ -70,10 +82,18 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
             return
         if output is None:
             raise click.UsageError("Missing option '-o' / '--output' (the Zarr store of the ensemble).")
+        if cluster is not None and scheduler is not None:
+            raise click.UsageError("give one of --cluster and --scheduler: --cluster starts its own scheduler here")
+        options = parse_options(cluster_options)
+        if options and cluster is None:
+            raise click.UsageError("--cluster-option is for the jobs of --cluster; give --cluster KIND (one of "
+                                   f"{', '.join(KINDS)})")
         result = run_study(spec, output, scheduler=scheduler, workers=workers, resume=resume,
                            progress=progress, overwrite=overwrite, check_memory=not no_memory_check,
-                           check_disk=not no_disk_check)
+                           check_disk=not no_disk_check, cluster=cluster, cluster_options=options)
     except (InputError, StoreError) as exc:
+        if isinstance(exc, InputError) and exc.field == "cluster_options":     # the option's own words
+            raise click.ClickException(f"--cluster-option: {str(exc)[len(exc.field) + 2:]}") from None
         raise fail(exc, SWEEP_FLAGS) from None
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"store: cannot write {output}: {exc.strerror or exc}") from None

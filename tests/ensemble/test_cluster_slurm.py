@@ -1,0 +1,186 @@
+"""A sweep on a real batch system: ``cracklab sweep --cluster slurm`` submits its dask
+workers as jobs of a one-node Slurm started by the tests (tests/slurm.py), and the
+workers write their members straight into an S3 store on loopback (tests/s3_server.py);
+nothing is mocked. The store is complete, verifies, and its members are those of a local
+run to the bit."""
+import re
+import subprocess
+import sys
+import time
+
+import fsspec
+import numpy as np
+import pytest
+import xarray as xr
+from click.testing import CliRunner
+
+from cli_process import ROOT, error_line
+from cracklab.cli import main
+from cracklab.ensemble import member_status, open_member
+
+STUDY = """
+[study]
+name = "cluster"
+builder = "elliptical_crack"
+[base]
+n = 16
+a = 0.25
+b = 0.2
+t_end = 0.05
+record.every = 2
+[sweep]
+p = [1.0, 1.2, 1.4, 1.6]
+"""
+
+#: each job runs in a directory of its own (no working or temporary directory shared with
+#: the sweep or the other jobs) and says which
+PROLOGUE = '["cd \\"$(mktemp -d)\\"", "export TMPDIR=\\"$PWD\\"", "echo cracklab-job-dir $PWD"]'
+
+
+def _job_pids(slurm) -> dict[int, str]:
+    """{pid: job id} of the processes of the running jobs (scontrol listpids)."""
+    out = slurm.run("scontrol", "listpids", check=False)
+    pids = {}
+    for line in out.splitlines()[1:]:
+        parts = line.split()
+        if len(parts) >= 2 and parts[0].isdigit():
+            pids[int(parts[0])] = parts[1]
+    return pids
+
+
+def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_env, slurm_env, tmp_path):
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    logs = tmp_path / "jobs"
+    cmd = [sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--progress",
+           "--cluster", "slurm", "--workers", "2", "--cluster-option", "interface=lo",
+           "--cluster-option", f"log_directory={logs}", "--cluster-option", "local_directory=.",
+           "--cluster-option", f"job_script_prologue={PROLOGUE}", "--cluster-option", "walltime=00:10:00"]
+    driver = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen, jobs_seen = {}, set()
+    try:
+        while driver.poll() is None:       # the processes of the jobs, while they run
+            pids = _job_pids(slurm_env)
+            seen.update(pids)
+            jobs_seen |= set(slurm_env.jobs())
+            time.sleep(0.2)
+        out, err = driver.communicate(timeout=60)
+    finally:
+        if driver.poll() is None:
+            driver.kill()
+            driver.wait()
+    assert driver.returncode == 0, err
+    assert "2 slurm jobs submitted for 2 workers" in err, err
+    assert "4 ran" in out, out
+    assert len(jobs_seen) == 2, jobs_seen
+    assert slurm_env.jobs() == []                     # the jobs are cancelled at the end
+
+    # every member was written by a worker process of a Slurm job, the two jobs each ran some,
+    # and none by the sweep's own process (it only made the store and its member table)
+    status = member_status(url)
+    assert len(status) == 4 and all(s["complete"] for s in status), status
+    writers = {}
+    for s in status:
+        attrs = open_member(url, s["id"]).attrs
+        host, pid = attrs["worker"].rsplit(":", 1)
+        assert int(pid) in seen, (attrs["worker"], sorted(seen))
+        assert int(pid) != driver.pid
+        writers[s["id"]] = seen[int(pid)]
+    assert len(set(writers.values())) == 2, writers
+
+    # each job worked in its own directory, none the sweep's
+    dirs = set()
+    for log in logs.glob("*.err"):
+        dirs |= set(re.findall(r"cracklab-job-dir (\S+)", log.read_text()))
+    for log in logs.glob("*.out"):
+        dirs |= set(re.findall(r"cracklab-job-dir (\S+)", log.read_text()))
+    assert len(dirs) == 2 and str(tmp_path) not in dirs, dirs
+
+    # sound, as `cracklab verify` sees it: on the object store where it verifies ensembles there
+    # (until then it says so in one line), and a copy of it on the local disk
+    verify = _verify(url)
+    assert verify.returncode == 0 or "checks ensembles on a local disk only" in verify.stderr, \
+        verify.stdout + verify.stderr
+    copy = tmp_path / "copy.zarr"
+    fs, path = fsspec.core.url_to_fs(url)
+    fs.get(path, str(copy), recursive=True)
+    verify = _verify(copy)
+    assert verify.returncode == 0 and "sound" in verify.stdout, verify.stdout + verify.stderr
+
+    # the same study on this machine, one member after the other: the same numbers to the bit
+    local = tmp_path / "local.zarr"
+    res = CliRunner().invoke(main, ["sweep", str(study), "-o", str(local), "--no-progress", "--scheduler",
+                                    "synchronous"])
+    assert res.exit_code == 0, res.output
+    for s in status:
+        a = open_member(url, s["id"]).load()
+        b = open_member(str(local), s["id"]).load()
+        assert set(a.data_vars) == set(b.data_vars) and a.data_vars, (list(a.data_vars), list(b.data_vars))
+        for name in a.variables:
+            assert np.array_equal(a[name].values, b[name].values, equal_nan=a[name].dtype.kind == "f"), name
+        assert a.attrs["scene"] == b.attrs["scene"]
+
+
+def test_slurm_refusing_the_jobs_is_one_line_naming_the_option(s3_env, slurm_env, tmp_path):
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    res = subprocess.run([sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--no-progress",
+                          "--cluster", "slurm", "--cluster-option", "queue=nosuch", "--cluster-option",
+                          "interface=lo"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    line = error_line(res)
+    assert line.startswith("Error: --cluster: sbatch refused the worker jobs: "), line
+    assert "partition" in line, line
+    assert slurm_env.jobs() == []
+    assert not _exists(url), "the store was touched before the jobs were refused"
+
+
+def _verify(store):
+    return subprocess.run([sys.executable, "-m", "cracklab.cli", "verify", str(store)], cwd=ROOT, capture_output=True,
+                          text=True, timeout=300)
+
+
+def _exists(url) -> bool:
+    fs, path = fsspec.core.url_to_fs(url)
+    return fs.exists(path)
+
+
+@pytest.mark.parametrize("args, expected", [
+    (["--cluster", "nosuch"], "Invalid value for '--cluster': 'nosuch' is not one of 'slurm', 'pbs'"),
+    (["--cluster", "slurm", "--cluster-option", "queue"], "--cluster-option: expected KEY=VALUE"),
+    (["--cluster", "slurm", "--cluster-option", "quee=short"],
+     "--cluster-option: 'quee' is not an option of a slurm cluster (did you mean 'queue'?); accepted: "),
+    (["--cluster-option", "queue=short"], "--cluster-option is for the jobs of --cluster; give --cluster KIND"),
+    (["--cluster", "slurm", "--scheduler", "tcp://127.0.0.1:1"], "give one of --cluster and --scheduler"),
+    (["--cluster", "slurm", "--cluster-option", "job_extra_directives=[--exclusive"],
+     "--cluster-option: job_extra_directives=[--exclusive: a list or table must be JSON"),
+    (["--cluster", "slurm", "--cluster-option", "memory=lots"],
+     "--cluster-option: memory='lots': not an amount of memory"),
+    (["--cluster", "slurm", "--cluster-option", "memory=10MB"],
+     "--cluster-option: memory=10MB gives each of the job's 1 worker process 9.54 MiB, but the largest member "
+     "needs"),
+])
+def test_bad_cluster_input_is_one_line_before_anything_runs(tmp_path, args, expected):
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    store = tmp_path / "ens.zarr"
+    res = CliRunner().invoke(main, ["sweep", str(study), "-o", str(store), "--no-progress", *args])
+    assert res.exit_code != 0
+    lines = [ln for ln in res.output.splitlines() if ln.startswith("Error:")]
+    assert len(lines) == 1 and expected in lines[0], res.output
+    assert not store.exists()
+
+
+def test_no_sbatch_here_is_one_line_naming_the_option(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path / "no-commands"))
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    store = tmp_path / "ens.zarr"
+    res = CliRunner().invoke(main, ["sweep", str(study), "-o", str(store), "--no-progress", "--cluster", "slurm"])
+    assert res.exit_code == 1
+    assert res.output.strip().splitlines()[-1].startswith(
+        "Error: --cluster: sbatch not found: --cluster slurm submits its workers with sbatch"), res.output
+    assert not store.exists()
