@@ -74,18 +74,36 @@ def parse_options(pairs, field: str = "--cluster-option") -> dict:
     return out
 
 
+def jobqueue():
+    """The dask_jobqueue module, imported with Python's Ctrl-C handler kept: dask_jobqueue
+    (0.9) replaces it on import with one that calls sys.exit(), which ended a sweep on
+    Ctrl-C with status 0, no message and the store's lock and the jobs left to the
+    interpreter's exit."""
+    import signal
+    import threading
+
+    if "dask_jobqueue" in sys.modules:
+        return sys.modules["dask_jobqueue"]
+    main = threading.current_thread() is threading.main_thread()
+    handler = signal.getsignal(signal.SIGINT) if main else None
+    try:
+        import dask_jobqueue
+    finally:
+        if handler is not None:
+            signal.signal(signal.SIGINT, handler)
+    return dask_jobqueue
+
+
 def cluster_class(kind: str):
     """dask_jobqueue's cluster class for ``kind``."""
-    import dask_jobqueue
-
-    return getattr(dask_jobqueue, KINDS[check_kind(kind)])
+    return getattr(jobqueue(), KINDS[check_kind(kind)])
 
 
 def accepted_options(kind: str) -> list[str]:
     """The options a ``kind`` cluster takes for its jobs and its scheduler (sorted)."""
+    cls = cluster_class(kind)
     from dask_jobqueue.core import Job, JobQueueCluster
 
-    cls = cluster_class(kind)
     names = set()
     for f in (cls.job_cls.__init__, Job.__init__, JobQueueCluster.__init__):
         names |= {p.name for p in inspect.signature(f).parameters.values()
@@ -201,7 +219,7 @@ def job_cluster(kind: str, options=None, *, workers: int, member_bytes: int | No
             said = [ln for ln in text.split("stderr:", 1)[-1].strip().splitlines() if ln.strip()]
             raise SchedulerError(field, f"{submit} refused the worker jobs: {said[0] if said else text}; "
                                         f"check the options (queue, account, walltime, memory) against "
-                                        f"`{submit} --help` and your site's limits") from None
+                                        f"{submit}'s manual and your site's limits") from None
         if progress:
             print(f"cracklab: {jobs} {kind} job{'s' if jobs != 1 else ''} submitted for {workers} worker"
                   f"{'s' if workers != 1 else ''} ({opts['processes']} per job, memory={opts['memory']} per job); "

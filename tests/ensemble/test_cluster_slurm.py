@@ -3,10 +3,15 @@ workers as jobs of a one-node Slurm started by the tests (tests/slurm.py), and t
 workers write their members straight into an S3 store on loopback (tests/s3_server.py);
 nothing is mocked. The store is complete, verifies, and its members are those of a local
 run to the bit."""
+import contextlib
+import os
 import re
+import signal
 import subprocess
 import sys
+import threading
 import time
+import urllib.request
 
 import fsspec
 import numpy as np
@@ -59,20 +64,32 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
            "--cluster-option", f"log_directory={logs}", "--cluster-option", "local_directory=.",
            "--cluster-option", f"job_script_prologue={PROLOGUE}", "--cluster-option", "walltime=00:10:00"]
     driver = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    seen, jobs_seen = {}, set()
+    lines = []
+    reader = threading.Thread(target=lambda: lines.extend(driver.stderr), daemon=True)
+    reader.start()
+    seen, jobs_seen, dashboard = {}, set(), None
     try:
         while driver.poll() is None:       # the processes of the jobs, while they run
             pids = _job_pids(slurm_env)
             seen.update(pids)
             jobs_seen |= set(slurm_env.jobs())
+            link = next((m.group(1) for ln in list(lines) if (m := re.search(r"dashboard (http://\S+)", ln))), None)
+            if link and dashboard is None:     # the dask dashboard answers while the sweep runs
+                with contextlib.suppress(OSError):
+                    with urllib.request.urlopen(link, timeout=10) as page:
+                        dashboard = (page.status, b"bokeh" in page.read().lower())
             time.sleep(0.2)
-        out, err = driver.communicate(timeout=60)
+        out = driver.stdout.read()
+        driver.wait(timeout=60)
+        reader.join(timeout=10)
     finally:
         if driver.poll() is None:
             driver.kill()
             driver.wait()
+    err = "".join(lines)
     assert driver.returncode == 0, err
     assert "2 slurm jobs submitted for 2 workers" in err, err
+    assert dashboard == (200, True), dashboard
     assert "4 ran" in out, out
     assert len(jobs_seen) == 2, jobs_seen
     assert slurm_env.jobs() == []                     # the jobs are cancelled at the end
@@ -184,3 +201,62 @@ def test_no_sbatch_here_is_one_line_naming_the_option(tmp_path, monkeypatch):
     assert res.output.strip().splitlines()[-1].startswith(
         "Error: --cluster: sbatch not found: --cluster slurm submits its workers with sbatch"), res.output
     assert not store.exists()
+
+
+def test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs(s3_env, slurm_env, tmp_path):
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    driver = subprocess.Popen([sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--no-progress",
+                               "--cluster", "slurm", "--workers", "2", "--cluster-option", "interface=lo",
+                               "--cluster-option", f"log_directory={tmp_path / 'jobs'}"],
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while len(slurm_env.jobs()) < 2 and driver.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert len(slurm_env.jobs()) == 2, "the jobs were not submitted"
+        driver.send_signal(signal.SIGINT)
+        out, err = driver.communicate(timeout=120)
+    finally:
+        if driver.poll() is None:
+            driver.kill()
+            driver.wait()
+    assert driver.returncode == 130, err
+    assert "rerun the same command to resume" in err, err
+    assert "Traceback" not in err, err
+    assert slurm_env.jobs() == []          # no job left holding the node
+
+
+RECIPE = """
+import sys
+from cracklab import ensemble
+from dask_jobqueue import SLURMCluster
+from distributed import Client
+
+study = ensemble.load_study(sys.argv[1])
+with SLURMCluster(cores=1, processes=1, memory="1GB", walltime="00:10:00", interface="lo",
+                  log_directory=sys.argv[3]) as cluster, Client(cluster) as client:
+    cluster.scale(jobs=2)
+    result = ensemble.run_study(study, sys.argv[2], client=client, progress=False)
+print(result.summary())
+"""
+
+
+def test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client(s3_env, slurm_env, tmp_path):
+    """docs/guide/cluster.md's recipe: a SLURMCluster made by the user, its Client given to
+    the sweep (run(client=...)), in a process of its own."""
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    res = subprocess.run([sys.executable, "-c", RECIPE, str(study), url, str(tmp_path / "jobs")], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "4 ran" in res.stdout, res.stdout
+    status = member_status(url)
+    assert len(status) == 4 and all(s["complete"] for s in status), status
+    workers = {open_member(url, s["id"]).attrs["worker"] for s in status}
+    assert all(int(w.rsplit(":", 1)[1]) != os.getpid() for w in workers), workers
+    assert slurm_env.jobs() == []
