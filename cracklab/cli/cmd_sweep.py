@@ -76,18 +76,18 @@ def sweep(study: str, output, scheduler, cluster, cluster_options, workers, resu
     try:
         load_toml(study, "a study: [study], [base], [sweep], [[members]]")
         spec = load_study(study, allow=allow)
-        if dry_run:
-            if not _dry_run_sweep(spec, study, output, workers, resume):
-                sys.exit(1)
-            return
-        if output is None:
-            raise click.UsageError("Missing option '-o' / '--output' (the Zarr store of the ensemble).")
         if cluster is not None and scheduler is not None:
             raise click.UsageError("give one of --cluster and --scheduler: --cluster starts its own scheduler here")
         options = parse_options(cluster_options)
         if options and cluster is None:
             raise click.UsageError("--cluster-option is for the jobs of --cluster; give --cluster KIND (one of "
                                    f"{', '.join(KINDS)})")
+        if dry_run:
+            if not _dry_run_sweep(spec, study, output, workers, resume, cluster=cluster, options=options):
+                sys.exit(1)
+            return
+        if output is None:
+            raise click.UsageError("Missing option '-o' / '--output' (the Zarr store of the ensemble).")
         result = run_study(spec, output, scheduler=scheduler, workers=workers, resume=resume,
                            progress=progress, overwrite=overwrite, check_memory=not no_memory_check,
                            check_disk=not no_disk_check, cluster=cluster, cluster_options=options)
@@ -117,9 +117,10 @@ def _sweep_interrupted(output) -> str:
         return "interrupted before any member completed; rerun the same command to resume"
 
 
-def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
+def _dry_run_sweep(spec, source, output, workers, resume, cluster=None, options=None) -> bool:
     """Print what the sweep of ``spec`` would take; False when it does not fit in memory or
-    on the disk of ``output``."""
+    on the disk of ``output``. With ``cluster``: the batch jobs it would submit (their
+    options checked; nothing submitted) instead of the local worker processes."""
     from ..ensemble import plan
     from ..ensemble.running import cores, preflight
     from ..ensemble.store import is_complete, store_str
@@ -144,6 +145,9 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     click.echo(f"  steps     {min(steps)}" + (f" to {max(steps)}" if max(steps) != min(steps) else "") + " per member")
     largest_id = max(known, key=lambda i: known[i].total)
     largest = known[largest_id]
+    if cluster is not None:
+        return _dry_run_cluster(cluster, options, workers, len(todo), largest) and \
+            _dry_run_disk(outputs, known, output)
     n = max(1, min(workers or cores(), len(known)))
     avail, source_mem = available_memory()
     if workers is None:
@@ -156,14 +160,7 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
         verdict = "does NOT fit: the sweep would be refused"
     click.echo(f"  memory    largest member {largest.describe()}; {n} worker process{'es' if n > 1 else ''}: "
                f"{fmt_bytes(n * (largest.total + PROCESS_BYTES))} of {fmt_bytes(avail)} {source_mem}: {verdict}")
-    from ..ensemble.running import sweep_output
-
-    sizes = [outputs[mid] for mid in known if mid in outputs]
-    on_disk = True
-    if sizes:
-        label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
-        line, on_disk = disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
-        click.echo(line)
+    on_disk = _dry_run_disk(outputs, known, output)
     if verdict != "fits":
         return False
     from ..ensemble import build_scene
@@ -182,3 +179,35 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
                f"of member runs; the largest timed: {cal['ms_per_step']:.3g} ms per step over {cal['steps_timed']} "
                f"steps)")
     return on_disk
+
+
+def _dry_run_disk(outputs, known, output) -> bool:
+    """Print the dry run's disk line; whether the output fits."""
+    from ..ensemble.running import sweep_output
+
+    sizes = [outputs[mid] for mid in known if mid in outputs]
+    if not sizes:
+        return True
+    label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
+    line, on_disk = disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
+    click.echo(line)
+    return on_disk
+
+
+def _dry_run_cluster(kind, options, workers, ntodo, largest) -> bool:
+    """Print the batch jobs a --cluster sweep would submit (the options checked as the sweep
+    checks them, MemoryBudgetError included; nothing submitted)."""
+    import math
+
+    from ..ensemble.clusters import check_kind, job_options
+
+    kind = check_kind(kind)
+    opts = job_options(kind, options or {}, largest.total)
+    n = max(1, min(workers or ntodo, ntodo))
+    jobs = math.ceil(n / opts["processes"])
+    shown = ", ".join(f"{k}={v}" for k, v in sorted(opts.items()) if k not in ("job_script_prologue",
+                                                                                  "scheduler_options"))
+    click.echo(f"  memory    largest member {largest.describe()}")
+    click.echo(f"  cluster   {jobs} {kind} job{'s' if jobs != 1 else ''} for {n} worker{'s' if n != 1 else ''} "
+               f"({shown}); not submitted")
+    return True

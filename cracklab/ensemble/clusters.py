@@ -149,6 +149,9 @@ def job_options(kind: str, options: dict, member_bytes: int | None, field: str =
     get = lambda k: opts.get(k, _configured(kind, k))  # noqa: E731
     cores = get("cores")
     processes = get("processes")
+    for key, value in (("cores", cores), ("processes", processes)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise InputError(field, f"{key}={value!r}: must be a whole number >= 1")
     if cores is None:
         cores = opts["cores"] = processes or 1
     if processes is None:
@@ -167,7 +170,10 @@ def job_options(kind: str, options: dict, member_bytes: int | None, field: str =
                                        f"process{'es' if processes > 1 else ''} {format_bytes(total / processes)}, but "
                                        f"the largest member needs {format_bytes(need)} with its worker; give more "
                                        f"memory, or fewer processes per job")
-    prologue = list(get("job_script_prologue") or [])
+    prologue = get("job_script_prologue") or []
+    if not isinstance(prologue, list) or not all(isinstance(line, str) for line in prologue):
+        raise InputError(field, f"job_script_prologue={prologue!r}: must be a list of shell lines, e.g. "
+                                f'["module load python", "source ~/venv/bin/activate"]')
     opts["job_script_prologue"] = [ONE_THREAD, *prologue]
     scheduler = dict(get("scheduler_options") or {})
     scheduler.setdefault("dashboard_address", ":0")         # a free port: print where it is
@@ -196,7 +202,7 @@ def job_cluster(kind: str, options=None, *, workers: int, member_bytes: int | No
 
     try:
         cluster = cls(**opts, silence_logs=logging.ERROR)
-    except ValueError as exc:
+    except (ValueError, TypeError) as exc:
         raise InputError("cluster_options", f"the {kind} cluster refused the options "
                                             f"({str(exc).splitlines()[0]})") from None
     try:

@@ -94,8 +94,9 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
     assert len(jobs_seen) == 2, jobs_seen
     assert slurm_env.jobs() == []                     # the jobs are cancelled at the end
 
-    # every member was written by a worker process of a Slurm job, the two jobs each ran some,
-    # and none by the sweep's own process (it only made the store and its member table)
+    # every member was written by a worker process of a Slurm job, none by the sweep's own
+    # process (it only made the store and its member table); how many each job ran depends on
+    # which started first
     status = member_status(url)
     assert len(status) == 4 and all(s["complete"] for s in status), status
     writers = {}
@@ -105,7 +106,7 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
         assert int(pid) in seen, (attrs["worker"], sorted(seen))
         assert int(pid) != driver.pid
         writers[s["id"]] = seen[int(pid)]
-    assert len(set(writers.values())) == 2, writers
+    assert set(writers.values()) <= jobs_seen, (writers, jobs_seen)
 
     # each job worked in its own directory, none the sweep's
     dirs = set()
@@ -176,6 +177,11 @@ def _exists(url) -> bool:
      "--cluster-option: job_extra_directives=[--exclusive: a list or table must be JSON"),
     (["--cluster", "slurm", "--cluster-option", "memory=lots"],
      "--cluster-option: memory='lots': not an amount of memory"),
+    (["--cluster", "slurm", "--cluster-option", "processes=0"], "--cluster-option: processes=0: must be a whole "
+                                                                 "number >= 1"),
+    (["--cluster", "slurm", "--cluster-option", "cores=two"], "--cluster-option: cores='two': must be a whole number"),
+    (["--cluster", "slurm", "--cluster-option", "job_script_prologue=module load python"],
+     "--cluster-option: job_script_prologue='module load python': must be a list of shell lines"),
     (["--cluster", "slurm", "--cluster-option", "memory=10MB"],
      "--cluster-option: memory=10MB gives each of the job's 1 worker process 9.54 MiB, but the largest member "
      "needs"),
@@ -260,3 +266,18 @@ def test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client(s3_env, slu
     workers = {open_member(url, s["id"]).attrs["worker"] for s in status}
     assert all(int(w.rsplit(":", 1)[1]) != os.getpid() for w in workers), workers
     assert slurm_env.jobs() == []
+
+
+def test_a_dry_run_shows_the_jobs_it_would_submit_and_submits_none(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATH", str(tmp_path / "no-commands"))      # no sbatch: nothing could be submitted
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY)
+    res = CliRunner().invoke(main, ["sweep", str(study), "--dry-run", "--cluster", "slurm", "--workers", "3",
+                                    "--cluster-option", "processes=2", "--cluster-option", "queue=short"])
+    assert res.exit_code == 0, res.output
+    line = next(ln for ln in res.output.splitlines() if ln.strip().startswith("cluster"))
+    assert "2 slurm jobs for 3 workers (cores=2, memory=" in line and "processes=2, queue=short); not submitted" \
+        in line, line
+    res = CliRunner().invoke(main, ["sweep", str(study), "--dry-run", "--cluster", "slurm", "--cluster-option",
+                                    "memory=10MB"])
+    assert res.exit_code == 1 and "Error: --cluster-option: memory=10MB gives each" in res.output, res.output
