@@ -19,6 +19,7 @@ import pytest
 import xarray as xr
 from click.testing import CliRunner
 
+import s3_server
 from cli_process import ROOT, error_line
 from cracklab.cli import main
 from cracklab.ensemble import member_status, open_member
@@ -116,13 +117,19 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
         dirs |= set(re.findall(r"cracklab-job-dir (\S+)", log.read_text()))
     assert len(dirs) == 2 and str(tmp_path) not in dirs, dirs
 
+    # the credentials are in no object of the store, no job's output and nothing the sweep printed
+    secret = s3_server.KEYS["AWS_SECRET_ACCESS_KEY"].encode()
+    fs, path = fsspec.core.url_to_fs(url)
+    objects = fs.find(path)
+    assert len(objects) > 20 and not [k for k in objects if secret in fs.cat_file(k)]
+    assert not [p for p in logs.iterdir() if secret in p.read_bytes()] and secret.decode() not in err + out
+
     # sound, as `cracklab verify` sees it: on the object store where it verifies ensembles there
     # (until then it says so in one line), and a copy of it on the local disk
     verify = _verify(url)
     assert verify.returncode == 0 or "checks ensembles on a local disk only" in verify.stderr, \
         verify.stdout + verify.stderr
     copy = tmp_path / "copy.zarr"
-    fs, path = fsspec.core.url_to_fs(url)
     fs.get(path, str(copy), recursive=True)
     verify = _verify(copy)
     assert verify.returncode == 0 and "sound" in verify.stdout, verify.stdout + verify.stderr
