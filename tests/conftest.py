@@ -47,10 +47,12 @@ SLOW = frozenset({
     "tests/output/test_object_store_lock.py::test_two_sweep_processes_started_at_once_on_one_s3_store",
     "tests/sequence/test_sequence_object_store.py::test_a_sequence_into_s3_is_the_in_memory_run_and_resumes_bit_for_bit",
     "tests/ensemble/test_object_store_members.py::test_a_member_rewritten_on_s3_is_never_served_as_complete",
-    # a sweep on the batch jobs of a one-node Slurm (tests/slurm.py), writing to the S3 server
+    # sweeps on the batch jobs of a one-node Slurm (tests/slurm.py) and on dask processes started
+    # by hand, writing to the S3 server
     "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",
     "tests/ensemble/test_cluster_slurm.py::test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client",
     "tests/ensemble/test_cluster_slurm.py::test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs",
+    "tests/ensemble/test_cluster_processes.py::test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
     "tests/studies/test_studies_quick.py::test_performance_study_stages_quick",

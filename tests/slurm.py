@@ -163,6 +163,20 @@ PartitionName=test Nodes={self.NODE} Default=YES MaxTime=INFINITE State=UP
         """Ids of the jobs in the queue (pending or running)."""
         return self.run("squeue", "-h", "-o", "%i", check=False).split()
 
+    def active(self) -> list[str]:
+        """Ids of the jobs pending or running (not those being ended: state CG)."""
+        return self.run("squeue", "-h", "-t", "PD,R", "-o", "%i", check=False).split()
+
+    def jobs_end(self, timeout: float = 30.0) -> bool:
+        """Whether the queue is empty within ``timeout`` seconds (a cancelled job stays
+        listed while its processes are being ended)."""
+        deadline = time.monotonic() + timeout
+        while self.jobs():
+            if time.monotonic() > deadline:
+                return False
+            time.sleep(0.2)
+        return True
+
     def stop(self) -> None:
         if self.procs and all(p.poll() is None for p in self.procs[:2]) and len(self.procs) == 3:
             ids = self.jobs()

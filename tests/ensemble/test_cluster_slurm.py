@@ -23,20 +23,8 @@ import s3_server
 from cli_process import ROOT, error_line
 from cracklab.cli import main
 from cracklab.ensemble import member_status, open_member
+from small_ensemble import CLUSTER_STUDY as STUDY
 
-STUDY = """
-[study]
-name = "cluster"
-builder = "elliptical_crack"
-[base]
-n = 16
-a = 0.25
-b = 0.2
-t_end = 0.05
-record.every = 2
-[sweep]
-p = [1.0, 1.2, 1.4, 1.6]
-"""
 
 #: each job runs in a directory of its own (no working or temporary directory shared with
 #: the sweep or the other jobs) and says which
@@ -64,6 +52,7 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
            "--cluster", "slurm", "--workers", "2", "--cluster-option", "interface=lo",
            "--cluster-option", f"log_directory={logs}", "--cluster-option", "local_directory=.",
            "--cluster-option", f"job_script_prologue={PROLOGUE}", "--cluster-option", "walltime=00:10:00"]
+    assert slurm_env.jobs_end(), "jobs of an earlier test are still in the queue"
     driver = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(driver.stderr), daemon=True)
@@ -93,7 +82,8 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
     assert dashboard == (200, True), dashboard
     assert "4 ran" in out, out
     assert len(jobs_seen) == 2, jobs_seen
-    assert slurm_env.jobs() == []                     # the jobs are cancelled at the end
+    assert slurm_env.active() == []                   # the jobs are cancelled at the end
+    assert slurm_env.jobs_end()
 
     # every member was written by a worker process of a Slurm job, none by the sweep's own
     # process (it only made the store and its member table); how many each job ran depends on
@@ -153,13 +143,14 @@ def test_slurm_refusing_the_jobs_is_one_line_naming_the_option(s3_env, slurm_env
     url = f"s3://{bucket}/ens.zarr"
     study = tmp_path / "study.toml"
     study.write_text(STUDY)
+    assert slurm_env.jobs_end(), "jobs of an earlier test are still in the queue"
     res = subprocess.run([sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--no-progress",
                           "--cluster", "slurm", "--cluster-option", "queue=nosuch", "--cluster-option",
                           "interface=lo"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     line = error_line(res)
     assert line.startswith("Error: --cluster: sbatch refused the worker jobs: "), line
     assert "partition" in line, line
-    assert slurm_env.jobs() == []
+    assert slurm_env.jobs() == []                     # none was submitted
     assert not _exists(url), "the store was touched before the jobs were refused"
 
 
@@ -221,6 +212,7 @@ def test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs(s3_env, slurm_env, tmp_path
     url = f"s3://{bucket}/ens.zarr"
     study = tmp_path / "study.toml"
     study.write_text(STUDY)
+    assert slurm_env.jobs_end(), "jobs of an earlier test are still in the queue"
     driver = subprocess.Popen([sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--no-progress",
                                "--cluster", "slurm", "--workers", "2", "--cluster-option", "interface=lo",
                                "--cluster-option", f"log_directory={tmp_path / 'jobs'}"],
@@ -239,7 +231,8 @@ def test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs(s3_env, slurm_env, tmp_path
     assert driver.returncode == 130, err
     assert "rerun the same command to resume" in err, err
     assert "Traceback" not in err, err
-    assert slurm_env.jobs() == []          # no job left holding the node
+    assert slurm_env.active() == []        # no job left holding the node
+    assert slurm_env.jobs_end()
 
 
 RECIPE = """
@@ -264,6 +257,7 @@ def test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client(s3_env, slu
     url = f"s3://{bucket}/ens.zarr"
     study = tmp_path / "study.toml"
     study.write_text(STUDY)
+    assert slurm_env.jobs_end(), "jobs of an earlier test are still in the queue"
     res = subprocess.run([sys.executable, "-c", RECIPE, str(study), url, str(tmp_path / "jobs")], cwd=tmp_path,
                          capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr
@@ -272,7 +266,7 @@ def test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client(s3_env, slu
     assert len(status) == 4 and all(s["complete"] for s in status), status
     workers = {open_member(url, s["id"]).attrs["worker"] for s in status}
     assert all(int(w.rsplit(":", 1)[1]) != os.getpid() for w in workers), workers
-    assert slurm_env.jobs() == []
+    assert slurm_env.jobs_end()
 
 
 def test_a_dry_run_shows_the_jobs_it_would_submit_and_submits_none(tmp_path, monkeypatch):
