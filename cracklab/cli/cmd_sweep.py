@@ -52,8 +52,8 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
               help="Import this Python module first (repeatable): a module of yours that registers "
                    "scene builders with cracklab.register_builder. A study file itself never imports "
                    "code: it names only registered builders.")
-def sweep(study: str, output, scheduler, cluster, cluster_options, workers, resume, overwrite, dry_run, no_memory_check, no_disk_check, allow,
-          progress, imports) -> None:
+def sweep(study: str, output, scheduler, cluster, cluster_options, workers, resume, overwrite, dry_run,
+          no_memory_check, no_disk_check, allow, progress, imports) -> None:
     """Run the ensemble of STUDY (a STUDY.toml, see docs/guide/ensembles.md) into OUTPUT.
 
     Every member's scene paths and parameter types are checked, and its memory estimated,

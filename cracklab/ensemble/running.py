@@ -250,8 +250,9 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
 
         kind = check_kind(cluster)
         if client is not None or scheduler is not None:
-            raise InputError("cluster", f"give one of cluster ({kind}) and {'client' if client is not None else 'scheduler'}"
-                                        f", not both: the cluster's own scheduler runs in this process")
+            other = "client" if client is not None else "scheduler"
+            raise InputError("cluster", f"give one of cluster ({kind}) and {other}, not both: the cluster's own "
+                                        f"scheduler runs in this process")
         cluster_options = check_options(kind, cluster_options)
     synchronous = client is None and scheduler == "synchronous"
     address = None if client is not None or synchronous or cluster is not None else \
