@@ -282,3 +282,24 @@ def test_a_dry_run_shows_the_jobs_it_would_submit_and_submits_none(tmp_path, mon
     res = CliRunner().invoke(main, ["sweep", str(study), "--dry-run", "--cluster", "slurm", "--cluster-option",
                                     "memory=10MB"])
     assert res.exit_code == 1 and "Error: --cluster-option: memory=10MB gives each" in res.output, res.output
+
+
+@pytest.mark.parametrize("kwargs, expected", [
+    ({"cluster": "nosuch"}, "cluster: unknown batch system 'nosuch'; accepted: slurm, pbs, sge, lsf, htcondor, oar, "
+                            "moab"),
+    ({"cluster": "slurm", "scheduler": "tcp://127.0.0.1:1"}, "cluster: give one of cluster (slurm) and scheduler, "
+                                                              "not both"),
+    ({"cluster": "pbs", "cluster_options": {"partition": "x"}}, "cluster_options: 'partition' is not an option of a "
+                                                                "pbs cluster"),
+    ({"cluster": "slurm", "cluster_options": ["queue=short"]}, "cluster_options: must be a dict of options"),
+])
+def test_bad_cluster_arguments_of_run_are_one_input_error(tmp_path, kwargs, expected):
+    from cracklab import ensemble
+    from cracklab.errors import InputError
+
+    store = tmp_path / "ens.zarr"
+    with pytest.raises(InputError) as info:
+        ensemble.run(ensemble.Builder("elliptical_crack", n=16, a=0.25, b=0.2, t_end=0.05), {"p": [1.0]}, store,
+                     progress=False, **kwargs)
+    assert str(info.value).startswith(expected), str(info.value)
+    assert not store.exists()
