@@ -58,8 +58,10 @@ def test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run(s3_
     reader = threading.Thread(target=lambda: lines.extend(driver.stderr), daemon=True)
     reader.start()
     seen, jobs_seen, dashboard = {}, set(), None
+    deadline = time.monotonic() + 600
     try:
         while driver.poll() is None:       # the processes of the jobs, while they run
+            assert time.monotonic() < deadline, f"the sweep did not end within 600 s: {''.join(lines)}"
             pids = _job_pids(slurm_env)
             seen.update(pids)
             jobs_seen |= set(slurm_env.jobs())
