@@ -52,6 +52,7 @@ SLOW = frozenset({
     "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",
     "tests/ensemble/test_cluster_slurm.py::test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client",
     "tests/ensemble/test_cluster_slurm.py::test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs",
+    "tests/ensemble/test_cluster_slurm.py::test_slurm_refusing_the_jobs_is_one_line_naming_the_option",
     "tests/ensemble/test_cluster_processes.py::test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
