@@ -58,22 +58,21 @@ def breakdown(dz, years=2.0, repeats=200) -> dict:
 
 def _step(scene, system, y, repeats):
     """Seconds of an accepted step's own arithmetic, without its six evaluations: the
-    pair's stage sums and error estimate (integrate._try, with rates that cost nothing)
+    pair's stage sums and error estimate (integrate.try_step, with rates that cost nothing)
     and the error's norm (integrate.error_norm)."""
     from types import SimpleNamespace
 
-    from cracklab.solver.sequence.integrate import _try, error_norm
+    from cracklab.solver.sequence.integrate import error_norm, tableau, try_step
     from cracklab.solver.sequence.pairs import PAIRS
 
     pair = PAIRS[scene.sequence.pair]
-    A = [np.asarray(row, dtype=float)[:i] for i, row in enumerate(pair.a)]
-    b, e = np.asarray(pair.b, dtype=float), np.asarray(pair.e, dtype=float)
+    A, b, e = tableau(pair)
     f = system.rates(3.15e7, y)
     k = np.empty((pair.stages, y.size))
     k[0] = f
-    free = SimpleNamespace(rates=lambda t, yi: f)
-    sums = _best(lambda: _try(free, pair, A, b, e, k, 3.15e7, y, 1.0), repeats)
-    y_new, err, _ = _try(free, pair, A, b, e, k, 3.15e7, y, 1.0)
+    free = SimpleNamespace(rates=lambda t, yi: f, stage=lambda dt, k: None)
+    sums = _best(lambda: try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0), repeats)
+    y_new, err, _ = try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0)
     norm = _best(lambda: error_norm(system, y_new, err, scene.sequence.tolerance), repeats)
     return sums + norm
 

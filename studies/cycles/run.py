@@ -291,7 +291,7 @@ def _fd_section(res):
     keys = sorted(fd, key=float, reverse=True)
     finest = fd[keys[-1]]
     target = (f"The target, BP1-FD at 25 m in under 15 minutes on one core: "
-              + (f"{finest['wall_s'] / 60:.0f} min here, {'met' if finest['wall_s'] <= 900 else 'not met'}."
+              + (f"{finest['wall_s'] / 60:.0f} min here, {'met' if finest['wall_s'] <= 900 else 'not met'}. "
                  if float(keys[-1]) <= 25 else f"25 m not run yet; the finest run, {keys[-1]} m, took "
                  f"{finest['wall_s'] / 60:.0f} min"))
     if len(keys) >= 2 and float(keys[-1]) > 25:
