@@ -31,6 +31,12 @@ STAMP = VENV / "cracklab-install.stamp"
 # Bump to force a reinstall when the install procedure itself changes.
 STAMP_FORMAT = "1"
 
+#: Debian packages the tests start services from (tests/slurm.py: a one-node Slurm on
+#: loopback for the sweep on batch jobs), installed by `test` when missing, as root, with
+#: apt-get; the commands that show them installed
+SYSTEM_PACKAGES = ("slurmctld", "slurmd", "slurm-client", "munge")
+SYSTEM_COMMANDS = ("munged", "slurmctld", "slurmd", "sbatch")
+
 USAGE = "usage: python3 bootstrap.py {test|demo|docs} [args...]"
 SITE = ROOT / "docs" / "_build" / "html"
 
@@ -97,6 +103,43 @@ def ensure_installed() -> None:
     say(f"environment ready ({time.monotonic() - t0:.0f} s)")
 
 
+def in_ci() -> bool:
+    return os.environ.get("CI", "").lower() in ("true", "1")
+
+
+def ensure_system_packages() -> None:
+    """Install SYSTEM_PACKAGES with apt-get when a command of theirs is missing. Without
+    root or apt-get, say so and go on (the tests that need them are skipped, saying why);
+    in CI (CI=true) a failed install stops the run."""
+    import shutil
+
+    found = lambda c: shutil.which(c) or shutil.which(c, path="/usr/sbin:/sbin")  # noqa: E731
+    if all(found(c) for c in SYSTEM_COMMANDS):
+        return
+    names = " ".join(SYSTEM_PACKAGES)
+    if os.geteuid() != 0 or shutil.which("apt-get") is None:
+        why = "not root" if os.geteuid() != 0 else "no apt-get"
+        if in_ci():
+            fail(f"CI needs the Debian packages {names} for the cluster tests, and cannot install them ({why})")
+        say(f"the cluster tests need the Debian packages {names}, not installed ({why}): those tests are "
+            f"skipped (as root: apt-get install {names})")
+        return
+    t0 = time.monotonic()
+    say(f"installing the Debian packages {names} (a one-node Slurm for the cluster tests)")
+    env = {**os.environ, "DEBIAN_FRONTEND": "noninteractive"}
+    for cmd in (["apt-get", "update", "-q"],
+                ["apt-get", "install", "-y", "-q", "--no-install-recommends", *SYSTEM_PACKAGES]):
+        res = subprocess.run(cmd, cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                             stderr=subprocess.STDOUT, text=True, env=env)
+        if res.returncode != 0:
+            sys.stderr.write(res.stdout[-4000:])
+            if in_ci():
+                fail(f"command failed (exit {res.returncode}): {' '.join(cmd)}", res.returncode)
+            say(f"could not install {names} (the output above says why): the cluster tests are skipped")
+            return
+    say(f"Debian packages installed ({time.monotonic() - t0:.0f} s)")
+
+
 def exec_in_venv(argv: list[str]) -> NoReturn:
     """Replace this process with argv, so its exit code is ours."""
     sys.stdout.flush()
@@ -120,6 +163,7 @@ def main(args: list[str]) -> None:
     ensure_installed()
 
     if command == "test":
+        ensure_system_packages()
         say("running tests")
         pytest_args = extra if extra else ["-n", "2", "--durations=30"]   # the slowest, for the CI budget
         exec_in_venv([str(VENV_PYTHON), "-m", "pytest", *pytest_args])

@@ -12,6 +12,7 @@ if str(Path(__file__).resolve().parent) not in sys.path:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
 import verification  # noqa: E402
 from s3_server import S3Server  # noqa: E402
+import slurm  # noqa: E402
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verification.md"
 
@@ -22,6 +23,7 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verificatio
 #: them out (docs/developer/developer.md, "Running the tests"). tests/test_slow_marker.py
 #: fails when an entry names no test.
 SLOW = frozenset({
+    "tests/sequence/test_sequence_memory.py::test_the_peak_memory_of_a_streamed_sequence_does_not_grow_with_its_length",
     # full scene runs (SCEC builders on coarse grids)
     "tests/scenes/test_tpv_rate_state.py::test_tpv101_nucleates_at_the_hypocentre_on_a_coarse_grid",
     "tests/scenes/test_tpv_rate_state.py::test_a_coarse_half_space_run_nucleates",
@@ -46,6 +48,13 @@ SLOW = frozenset({
     "tests/output/test_object_store_lock.py::test_two_sweep_processes_started_at_once_on_one_s3_store",
     "tests/sequence/test_sequence_object_store.py::test_a_sequence_into_s3_is_the_in_memory_run_and_resumes_bit_for_bit",
     "tests/ensemble/test_object_store_members.py::test_a_member_rewritten_on_s3_is_never_served_as_complete",
+    # sweeps on the batch jobs of a one-node Slurm (tests/slurm.py) and on dask processes started
+    # by hand, writing to the S3 server
+    "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",
+    "tests/ensemble/test_cluster_slurm.py::test_the_python_recipe_a_jobqueue_cluster_of_your_own_and_client",
+    "tests/ensemble/test_cluster_slurm.py::test_ctrl_c_of_a_sweep_on_slurm_cancels_its_jobs",
+    "tests/ensemble/test_cluster_slurm.py::test_slurm_refusing_the_jobs_is_one_line_naming_the_option",
+    "tests/ensemble/test_cluster_processes.py::test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand",
     # studies' runs and compilations in fresh processes with empty caches
     "tests/studies/test_studies_quick.py::test_performance_study_quick_writes_one_table_per_thread_count",
     "tests/studies/test_studies_quick.py::test_performance_study_stages_quick",
@@ -105,6 +114,33 @@ def s3_env(s3_server, monkeypatch, tmp_path):
     for name in ("AWS_PROFILE", "AWS_SESSION_TOKEN", "AWS_ENDPOINT_URL_S3"):
         monkeypatch.delenv(name, raising=False)
     yield s3_server
+
+
+# ----------------------------------------------------------------------------- a batch system
+@pytest.fixture(scope="session")
+def slurm_cluster(tmp_path_factory):
+    """A one-node Slurm on loopback (tests/slurm.py), one for the session (under
+    pytest-xdist: one per worker process), stopped at its end. Where Slurm is not
+    installed (or not root) the tests that use it are skipped, saying why; in CI
+    (CI=true, where `python3 bootstrap.py test` installs it) they fail."""
+    why = slurm.missing()
+    if why:
+        if os.environ.get("CI", "").lower() in ("true", "1"):
+            pytest.fail(f"CI runs the cluster tests: {why}")
+        pytest.skip(why)
+    cluster = slurm.Slurm(tmp_path_factory.mktemp("slurm")).start()
+    try:
+        yield cluster
+    finally:
+        cluster.stop()
+
+
+@pytest.fixture
+def slurm_env(slurm_cluster, monkeypatch):
+    """SLURM_CONF set for this test (sbatch, squeue and scancel find ``slurm_cluster``); yields it."""
+    for name, value in slurm_cluster.env.items():
+        monkeypatch.setenv(name, value)
+    yield slurm_cluster
 
 
 def is_slow(nodeid: str) -> bool:

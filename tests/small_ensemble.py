@@ -29,6 +29,10 @@ record.every = 2
 p = [1.0, 1.2]
 """
 
+#: four members of the same cracks, for the sweeps on a cluster (tests/ensemble/test_cluster_slurm.py,
+#: test_cluster_processes.py): enough for two workers
+CLUSTER_STUDY = STUDY.replace('name = "s3"', 'name = "cluster"').replace("p = [1.0, 1.2]", "p = [1.0, 1.2, 1.4, 1.6]")
+
 
 def sweep(store, **kw):
     return E.run(BUILDER, SWEEP, store, scheduler="synchronous", progress=False, **kw)

@@ -6,10 +6,12 @@ import sys
 
 import click
 
+from ..ensemble.clusters import KINDS
 from .common import CONTEXT, disk_line, fmt_time, exit_interrupted, load_toml, fail, main
 
 
-SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"}
+SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers", "cluster": "--cluster",
+               "cluster_options": "--cluster-option"}
 
 
 @main.command(context_settings=CONTEXT)
@@ -19,9 +21,18 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Address of a running dask scheduler (default: env DASK_SCHEDULER_ADDRESS, "
                    "else an embedded LocalCluster); one that cannot be reached within 5 s is an error.")
+@click.option("--cluster", type=click.Choice(list(KINDS), case_sensitive=False), default=None,
+              help="Run the workers as batch jobs of this system (dask-jobqueue), submitted from here and "
+                   "cancelled at the end; OUTPUT must be reachable from the nodes (an object store URL, or "
+                   "a shared file system). See docs/guide/cluster.md.")
+@click.option("--cluster-option", "cluster_options", multiple=True, metavar="KEY=VALUE",
+              help="An option of the --cluster jobs (repeatable): queue, account, walltime, memory, cores, "
+                   "processes, job_extra_directives, ... (dask-jobqueue's names; over dask's jobqueue "
+                   "configuration). Default: one core and one worker per job, memory for the largest member.")
 @click.option("--workers", type=click.IntRange(min=1), default=None,
               help="Worker processes of the embedded LocalCluster (default: one per core, as many as "
-                   "the memory holds).")
+                   "the memory holds), or with --cluster of the batch jobs in all (default: one per member "
+                   "to run).")
 @click.option("--resume/--no-resume", default=True, show_default=True,
               help="Skip members already complete in OUTPUT.")
 @click.option("--overwrite", is_flag=True,
@@ -41,8 +52,8 @@ SWEEP_FLAGS = {"scheduler": "--scheduler", "store": "-o", "workers": "--workers"
               help="Import this Python module first (repeatable): a module of yours that registers "
                    "scene builders with cracklab.register_builder. A study file itself never imports "
                    "code: it names only registered builders.")
-def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no_memory_check, no_disk_check, allow,
-          progress, imports) -> None:
+def sweep(study: str, output, scheduler, cluster, cluster_options, workers, resume, overwrite, dry_run,
+          no_memory_check, no_disk_check, allow, progress, imports) -> None:
     """Run the ensemble of STUDY (a STUDY.toml, see docs/guide/ensembles.md) into OUTPUT.
 
     Every member's scene paths and parameter types are checked, and its memory estimated,
@@ -54,6 +65,7 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
     import importlib
 
     from ..ensemble import load_study, run_study
+    from ..ensemble.clusters import parse_options
     from ..errors import InputError, StoreError
 
     for module in imports:
@@ -64,16 +76,24 @@ def sweep(study: str, output, scheduler, workers, resume, overwrite, dry_run, no
     try:
         load_toml(study, "a study: [study], [base], [sweep], [[members]]")
         spec = load_study(study, allow=allow)
+        if cluster is not None and scheduler is not None:
+            raise click.UsageError("give one of --cluster and --scheduler: --cluster starts its own scheduler here")
+        options = parse_options(cluster_options)
+        if options and cluster is None:
+            raise click.UsageError("--cluster-option is for the jobs of --cluster; give --cluster KIND (one of "
+                                   f"{', '.join(KINDS)})")
         if dry_run:
-            if not _dry_run_sweep(spec, study, output, workers, resume):
+            if not _dry_run_sweep(spec, study, output, workers, resume, cluster=cluster, options=options):
                 sys.exit(1)
             return
         if output is None:
             raise click.UsageError("Missing option '-o' / '--output' (the Zarr store of the ensemble).")
         result = run_study(spec, output, scheduler=scheduler, workers=workers, resume=resume,
                            progress=progress, overwrite=overwrite, check_memory=not no_memory_check,
-                           check_disk=not no_disk_check)
+                           check_disk=not no_disk_check, cluster=cluster, cluster_options=options)
     except (InputError, StoreError) as exc:
+        if isinstance(exc, InputError) and exc.field == "cluster_options":     # the option's own words
+            raise click.ClickException(f"--cluster-option: {str(exc)[len(exc.field) + 2:]}") from None
         raise fail(exc, SWEEP_FLAGS) from None
     except OSError as exc:       # a read-only location, a full disk, ...
         raise click.ClickException(f"store: cannot write {output}: {exc.strerror or exc}") from None
@@ -97,9 +117,10 @@ def _sweep_interrupted(output) -> str:
         return "interrupted before any member completed; rerun the same command to resume"
 
 
-def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
+def _dry_run_sweep(spec, source, output, workers, resume, cluster=None, options=None) -> bool:
     """Print what the sweep of ``spec`` would take; False when it does not fit in memory or
-    on the disk of ``output``."""
+    on the disk of ``output``. With ``cluster``: the batch jobs it would submit (their
+    options checked; nothing submitted) instead of the local worker processes."""
     from ..ensemble import plan
     from ..ensemble.running import cores, preflight
     from ..ensemble.store import is_complete, store_str
@@ -124,6 +145,9 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
     click.echo(f"  steps     {min(steps)}" + (f" to {max(steps)}" if max(steps) != min(steps) else "") + " per member")
     largest_id = max(known, key=lambda i: known[i].total)
     largest = known[largest_id]
+    if cluster is not None:
+        return _dry_run_cluster(cluster, options, workers, len(todo), largest) and \
+            _dry_run_disk(outputs, known, output)
     n = max(1, min(workers or cores(), len(known)))
     avail, source_mem = available_memory()
     if workers is None:
@@ -136,14 +160,7 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
         verdict = "does NOT fit: the sweep would be refused"
     click.echo(f"  memory    largest member {largest.describe()}; {n} worker process{'es' if n > 1 else ''}: "
                f"{fmt_bytes(n * (largest.total + PROCESS_BYTES))} of {fmt_bytes(avail)} {source_mem}: {verdict}")
-    from ..ensemble.running import sweep_output
-
-    sizes = [outputs[mid] for mid in known if mid in outputs]
-    on_disk = True
-    if sizes:
-        label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
-        line, on_disk = disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
-        click.echo(line)
+    on_disk = _dry_run_disk(outputs, known, output)
     if verdict != "fits":
         return False
     from ..ensemble import build_scene
@@ -162,3 +179,35 @@ def _dry_run_sweep(spec, source, output, workers, resume) -> bool:
                f"of member runs; the largest timed: {cal['ms_per_step']:.3g} ms per step over {cal['steps_timed']} "
                f"steps)")
     return on_disk
+
+
+def _dry_run_disk(outputs, known, output) -> bool:
+    """Print the dry run's disk line; whether the output fits."""
+    from ..ensemble.running import sweep_output
+
+    sizes = [outputs[mid] for mid in known if mid in outputs]
+    if not sizes:
+        return True
+    label = f"{len(sizes)} members' output" if len(sizes) != 1 else "1 member's output"
+    line, on_disk = disk_line(sweep_output(sizes), output, what="the sweep", reuse=False, label=label)
+    click.echo(line)
+    return on_disk
+
+
+def _dry_run_cluster(kind, options, workers, ntodo, largest) -> bool:
+    """Print the batch jobs a --cluster sweep would submit (the options checked as the sweep
+    checks them, MemoryBudgetError included; nothing submitted)."""
+    import math
+
+    from ..ensemble.clusters import check_kind, job_options
+
+    kind = check_kind(kind)
+    opts = job_options(kind, options or {}, largest.total)
+    n = max(1, min(workers or ntodo, ntodo))
+    jobs = math.ceil(n / opts["processes"])
+    shown = ", ".join(f"{k}={v}" for k, v in sorted(opts.items()) if k not in ("job_script_prologue",
+                                                                                  "scheduler_options"))
+    click.echo(f"  memory    largest member {largest.describe()}")
+    click.echo(f"  cluster   {jobs} {kind} job{'s' if jobs != 1 else ''} for {n} worker{'s' if n != 1 else ''} "
+               f"({shown}); not submitted")
+    return True

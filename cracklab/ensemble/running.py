@@ -204,7 +204,7 @@ def _workers_for(estimates, todo, workers, local):
 
 def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, workers=None,
         progress=None, fft_threads=1, study_spec=None, overwrite=False, check_memory=True,
-        check_disk=True) -> SweepResult:
+        check_disk=True, cluster=None, cluster_options=None) -> SweepResult:
     """Run every member of ``sweep`` over ``base_scene`` into the Zarr v3 ``store``.
 
     ``base_scene``: a Scene (parameters are scene paths), a ``Builder``, or a builder
@@ -213,7 +213,12 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     again. Tasks go to ``client``, else to the scheduler at ``scheduler`` (or env
     DASK_SCHEDULER_ADDRESS), else to an embedded LocalCluster with ``workers`` one-thread
     processes (default: one per core); ``scheduler="synchronous"`` runs the members one
-    after the other in this process (debugging, tiny sweeps). A failing member does not
+    after the other in this process (debugging, tiny sweeps). ``cluster``, a batch system
+    (slurm, pbs, sge, lsf, htcondor, oar, moab): the workers are batch jobs submitted for
+    this sweep, ``workers`` worker processes in all (default: one per member to run), with
+    ``cluster_options`` (e.g. {"queue": "short", "walltime": "02:00:00"}) over dask's
+    configuration (cracklab.ensemble.clusters; the store must be one the nodes reach: an
+    object store URL, or a shared file system). A failing member does not
     stop the others: see ``SweepResult.failed`` (and the member's attrs error and
     traceback). ``progress``: a bar over members (default: when stderr is a terminal).
     ``fft_threads``: numerics.fft_threads of every member that does not set it (None: as
@@ -239,8 +244,18 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
     todo = [m for m in members if replace or not resume or not is_complete(store, m.id)]
     if check_disk and todo and not is_url(store):
         _check_sweep_disk(store, [outputs[m.id] for m in todo if m.id in outputs], len(todo))
+    if cluster is not None:
+        from .clusters import check_kind, check_options
+
+        kind = check_kind(cluster)
+        if client is not None or scheduler is not None:
+            other = "client" if client is not None else "scheduler"
+            raise InputError("cluster", f"give one of cluster ({kind}) and {other}, not both: the cluster's own "
+                                        f"scheduler runs in this process")
+        cluster_options = check_options(kind, cluster_options)
     synchronous = client is None and scheduler == "synchronous"
-    address = None if client is not None or synchronous else (scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS"))
+    address = None if client is not None or synchronous or cluster is not None else \
+        (scheduler or os.environ.get("DASK_SCHEDULER_ADDRESS"))
     memory_limit = "auto"
     if check_memory and todo:
         if synchronous:
@@ -250,31 +265,36 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
 
                 fits(max(known, key=lambda e: e.total), what="the largest member",
                      hint="make the grids coarser or the runs shorter, or --no-memory-check")
-        elif client is None and not address:
+        elif client is None and not address and cluster is None:
             n, memory_limit = _workers_for(estimates, todo, workers, local=True)
             if n is not None and workers is None and n < min(cores(), len(todo)):
                 workers = n
                 if progress is not False:
                     print(f"cracklab: {n} worker process{'es' if n > 1 else ''} (as many as the memory holds "
                           f"with the largest member)", file=sys.stderr, flush=True)
-    own = None
-    if address:                         # reached before the store is touched
-        own = connect(address, where="scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS")
-        client = own
-        if check_memory and todo:
-            _check_remote_memory(own, estimates, todo)
-    try:
+    with contextlib.ExitStack() as stack:
+        if address:                         # reached before the store is touched
+            client = stack.enter_context(contextlib.closing(
+                connect(address, where="scheduler" if scheduler else "DASK_SCHEDULER_ADDRESS")))
+            if check_memory and todo:
+                _check_remote_memory(client, estimates, todo)
+        elif cluster is not None and todo:  # the jobs submitted before the store is touched
+            from .clusters import job_cluster
+
+            known = [e.total for m in todo if (e := estimates.get(m.id)) is not None]
+            n = max(1, min(workers or len(todo), len(todo)))
+            client = stack.enter_context(job_cluster(cluster, cluster_options, workers=n,
+                                                     member_bytes=max(known) if known and check_memory else None,
+                                                     progress=progress is not False))
         where = store_for(store)
         lock = where.lock()             # the sweep lock (ensemble.lock.store_lock)
         with lock:
             return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
                                scheduler=scheduler, workers=workers, progress=progress,
                                fft_threads=fft_threads, replace=replace, memory_limit=memory_limit,
-                               address=address, check_disk=check_disk, lock=lock,
+                               address=address, check_disk=check_disk,
+                               batch=f"{kind} jobs" if cluster is not None else None, lock=lock,
                                guard=where.write_guard(lock))
-    finally:
-        if own is not None:
-            own.close()
 
 
 def sweep_output(outputs):
@@ -381,7 +401,7 @@ def _stop_lost(store, lock):
 
 def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
                 progress, fft_threads, replace=False, memory_limit="auto", address=None,
-                check_disk=True, lock=None, guard=None) -> SweepResult:
+                check_disk=True, batch=None, lock=None, guard=None) -> SweepResult:
     from ..model.scene import Scene
 
     if replace:
@@ -429,10 +449,11 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         from distributed import as_completed
         from tqdm import tqdm
 
-        if progress and (client is None or address):
+        if progress and (client is None or address or batch):
             n = max(1, min(workers or cores(), len(todo)))
             print(f"cracklab: {len(todo)} member{'s' if len(todo) != 1 else ''} to run; " +
-                  (f"on the scheduler at {address}" if address else "on the given client" if client is not None
+                  (f"on {batch}" if batch else f"on the scheduler at {address}" if address
+                   else "on the given client" if client is not None
                    else f"starting a local cluster of {n} worker process{'es' if n > 1 else ''}"),
                   file=sys.stderr, flush=True)
         with dask_client(client, scheduler, workers, len(todo), memory_limit=memory_limit) as c:

@@ -306,9 +306,10 @@ class SequenceRecorder:
                     ds = ds.assign_coords(**self.station_coords())
                 enc = checkpoint.encoding(ds)
                 for name, var in ds.variables.items():
-                    if dim in var.dims:
-                        enc[name]["chunks"] = tuple((CHUNK if dim == "t_station" else 1) if d == dim else ds.sizes[d]
-                                                    for d in var.dims)
+                    if dim in var.dims:     # a snapshot per chunk of a field; series in long chunks (a
+                        # chunk per row would make reading t back cost memory in proportion to the run)
+                        along = 1 if dim == "t" and var.ndim > 1 else CHUNK
+                        enc[name]["chunks"] = tuple(along if d == dim else ds.sizes[d] for d in var.dims)
                 _write(ds, self.path, mode="w" if first_ever else "a", encoding=enc)
             else:
                 _write(ds, self.path, mode="a", append_dim=dim)

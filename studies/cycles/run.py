@@ -60,6 +60,18 @@ def run_one(out, dz, years, tolerance, force=False, log=print, dynamic=False) ->
     return meta
 
 
+def kept_section(text, heading) -> list[str]:
+    """The lines of ``text`` from ``heading`` to the next heading of its level (none if absent):
+    a section written from runs of another code that OUT does not hold, kept as it was."""
+    lines = text.splitlines()
+    if heading not in lines:
+        return []
+    start = lines.index(heading)
+    level = heading.split(" ")[0] + " "
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith(level)), len(lines))
+    return lines[start:end]
+
+
 DOMAIN_DZ, DOMAIN_YEARS, DOMAIN_DEPTHS = 200.0, 400.0, (80e3, 160e3, 320e3, 640e3)
 
 
@@ -442,6 +454,8 @@ def write_page(res, dzs, page, figs, command):
     if res.get("uguca"):
         from studies.cycles.uguca import section
         lines += section(res["uguca"])
+    elif res.get("uguca_kept"):
+        lines += res["uguca_kept"]
     if res.get("ensemble"):
         e = res["ensemble"]
         lines += ["## An ensemble of sequences", "",
@@ -492,6 +506,8 @@ def main(argv=None) -> int:
         res["ensemble"] = analyse_ensemble(args.ensemble)
     if (out / "uguca_bp1.json").exists():       # python -m studies.cycles.uguca
         res["uguca"] = json.loads((out / "uguca_bp1.json").read_text())
+    elif Path(args.page).exists():      # uguca's runs are not in OUT: their section as the page has it
+        res["uguca_kept"] = kept_section(Path(args.page).read_text(), "## Against uguca")
     cost = out / f"cost_dz{args.dz[-1]:g}.json"
     if cost.exists():
         res["cost"] = json.loads(cost.read_text())

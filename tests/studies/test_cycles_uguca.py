@@ -30,3 +30,13 @@ def test_the_section_pairs_the_earthquakes_and_states_the_largest_gap():
     # the earthquakes above 0.1 m/s paired in order: 250.0-251.0, 339.5-341.0, 428.7-430.0
     assert "differ by -1.50 to -1.00 years" in text
     assert "4 earthquakes here and 3 in uguca" in text and "3 of cracklab's nucleate at depth" in text
+
+
+def test_the_uguca_section_is_kept_from_the_page_when_its_runs_are_not_at_hand():
+    from studies.cycles.run import kept_section
+
+    page = "# T\n\n## Events\n\nx\n\n## Against uguca\n\nline 1\n\n### sub\n\nline 2\n\n## An ensemble\n\ny\n"
+    assert kept_section(page, "## Against uguca") == ["## Against uguca", "", "line 1", "", "### sub", "",
+                                                      "line 2", ""]
+    assert kept_section(page, "## Missing") == []
+    assert kept_section("# T\n\n## Against uguca\nlast\n", "## Against uguca") == ["## Against uguca", "last"]
