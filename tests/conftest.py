@@ -48,6 +48,11 @@ SLOW = frozenset({
     "tests/output/test_object_store_lock.py::test_two_sweep_processes_started_at_once_on_one_s3_store",
     "tests/sequence/test_sequence_object_store.py::test_a_sequence_into_s3_is_the_in_memory_run_and_resumes_bit_for_bit",
     "tests/ensemble/test_object_store_members.py::test_a_member_rewritten_on_s3_is_never_served_as_complete",
+    "tests/ensemble/test_object_store_verify.py::test_verify_of_an_ensemble_at_a_url_names_what_a_local_verify_names",
+    "tests/ensemble/test_object_store_verify.py::test_a_sweep_into_a_url_recomputes_what_verify_names",
+    "tests/ensemble/test_object_store_verify.py::test_readers_at_a_url_refuse_a_member_whose_metadata_was_changed",
+    "tests/ensemble/test_object_store_verify.py::test_export_summary_and_plot_read_an_ensemble_at_a_url",
+    "tests/ensemble/test_object_store_faults.py::test_members_of_a_sweep_whose_lock_was_taken_over_stop_writing",
     # sweeps on the batch jobs of a one-node Slurm (tests/slurm.py) and on dask processes started
     # by hand, writing to the S3 server
     "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",

@@ -64,7 +64,9 @@ def summary(data, *, complete_only=False) -> xr.Dataset:
     if isinstance(data, (str, os.PathLike)):
         store = store_str(data)
         if store_kind(store) == "run":
-            ds = xr.open_zarr(store, consolidated=False)
+            from ..output.stores import zarr_of
+
+            ds = xr.open_zarr(zarr_of(store), consolidated=False)
             return measures(ds).assign_attrs(title=f"cracklab summary of {store}", store=store)
         status = member_status(store)
         if complete_only:

@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import click
 
-from .common import CONTEXT, exit_interrupted, print_note, pick_member, fail, main
+from .common import CONTEXT, StoreArgument, exit_interrupted, print_note, pick_member, fail, main
 
 
 @main.command(context_settings=CONTEXT)
-@click.argument("store", type=click.Path(exists=True))
+@click.argument("store", type=StoreArgument())
 @click.option("-o", "--output", "output", default=None, type=click.Path(dir_okay=False),
               help="netCDF4 file to write.")
 @click.option("--netcdf", "netcdf", default=None, type=click.Path(dir_okay=False), hidden=True,

@@ -5,7 +5,7 @@ import json
 
 import click
 
-from .common import CONTEXT, exit_interrupted, print_note, pick_member, fail, main
+from .common import CONTEXT, StoreArgument, exit_interrupted, output_beside, print_note, pick_member, fail, main
 
 
 PLOT_KINDS = ("all", "snapshot", "rupture", "length", "summary", "panels", "gif", "stations")
@@ -46,12 +46,10 @@ def _refuse_damaged(store):
     """Raise a StoreError naming ``store`` and the remedy when its listing shows damage (a missing
     chunk or array would be drawn as a blank picture), as ``cracklab export`` does."""
     from ..errors import StoreError
-    from ..output.stores import is_url
+    from ..output.stores import store_for
     from ..output.verify import check_run
 
-    if is_url(store):
-        return
-    report = check_run(store, read=False)
+    report = check_run(store_for(store).tree(), read=False)     # a URL: its keys listed once
     if not report.ok:
         raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
 
@@ -82,9 +80,10 @@ def _check_time(ds, time_):
 
 
 @main.command(context_settings=CONTEXT)
-@click.argument("store", type=click.Path(exists=True))
+@click.argument("store", type=StoreArgument())
 @click.option("-o", "--output", type=click.Path(), default=None,
-              help="Output file (one kind) or directory (--kind all); default next to STORE.")
+              help="Output file (one kind) or directory (--kind all); default next to STORE (in the current "
+                   "directory for a STORE at a URL).")
 @click.option("--kind", type=click.Choice(PLOT_KINDS), default="all", show_default=True,
               help="snapshot: a field at one time; rupture: rupture-time contours; length: mean "
                    "crack length vs t; summary / panels: ensemble figures; gif: animation; stations: "
@@ -125,12 +124,14 @@ def plot(store, output, kind, field, time_, member, by, x_param, allow_partial, 
                 raise click.ClickException(f"{option}: {store} is a single run, not an ensemble")
         if kind in ("summary", "panels"):
             raise click.ClickException(f"--kind {kind} needs an ensemble store")
-    stem = Path(store.rstrip("/")).name.removesuffix(".zarr")
-    parent = Path(store.rstrip("/")).parent
+    parent, stem = output_beside(store)
     try:
         if not ens:
             _refuse_damaged(store)
-            ds = _run_for_figures(xr.open_zarr(store, consolidated=False), store, allow_partial, f"the run in {store}")
+            from ..output.stores import zarr_of
+
+            ds = _run_for_figures(xr.open_zarr(zarr_of(store), consolidated=False), store, allow_partial,
+                                  f"the run in {store}")
         elif member is not None or kind in ("snapshot", "rupture", "gif", "stations"):
             status = member_status(store)
             if member is None and len(status) != 1:

@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import click
 
-from .common import CONTEXT, main
+from .common import CONTEXT, StoreArgument, main
 
 
 @main.command(context_settings=CONTEXT)
-@click.argument("store", type=click.Path(exists=True, file_okay=False))
+@click.argument("store", type=StoreArgument(dir_only=True))
 @click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
               help="Write the table to this CSV file instead of printing it.")
 def summary(store, output) -> None:
@@ -28,7 +28,7 @@ def summary(store, output) -> None:
     if "member" not in table.dims:
         from pathlib import Path
 
-        table = table.expand_dims(run=[Path(store.rstrip("/")).name])
+        table = table.expand_dims(run=[Path(store.rstrip("/").rsplit("/", 1)[-1]).name])
     frame = table.to_dataframe()
     first = [c for c in table.coords if c in frame.columns]          # parameters and status, then the measures
     frame = frame[first + [c for c in frame.columns if c not in first]]

@@ -10,6 +10,30 @@ import click
 
 
 CONTEXT = {"help_option_names": ["-h", "--help"]}
+
+
+class StoreArgument(click.ParamType):
+    """A store to read: a URL (``s3://bucket/ens.zarr``: checked by the command, through its
+    ``Store``), or a local path that must exist (a directory, with ``dir_only``)."""
+
+    name = "store"
+
+    def __init__(self, dir_only: bool = False):
+        self.path = click.Path(exists=True, file_okay=not dir_only)
+
+    def convert(self, value, param, ctx):
+        if "://" in str(value):
+            return str(value).rstrip("/")
+        return self.path.convert(value, param, ctx)
+
+
+def output_beside(store: str):
+    """(directory, stem) of the default outputs next to ``store``; the current directory
+    for a store at a URL."""
+    from pathlib import Path
+
+    name = Path(store.rstrip("/").rsplit("/", 1)[-1]).name.removesuffix(".zarr")
+    return (Path(".") if "://" in store else Path(store.rstrip("/")).parent), name
 INTERRUPTED = 130       # exit status on Ctrl-C (128 + SIGINT), as shells report it
 
 

@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import json
 import math
-import os
 from pathlib import Path
 
 from ..output import verify as V
 from .identity import decode, member_id
 from .planning import TOP_LEVEL
 
-_BASES: dict = {}      # {(root zarr.json, mtime, size): base key} of the last store asked
+_BASES: dict = {}      # {(root zarr.json, mtime, size): base key} of the last local store asked
 
 
 def put(report, damage) -> None:
@@ -25,27 +24,33 @@ def put(report, damage) -> None:
         V.add(report, damage)
 
 
-def _base_key(store: str, params: dict):
-    """The base part of the member ids of ``store`` (see ``identity.member_id``): "builder"
-    for members of a builder, "scene:<digest>" for a sweep over a Scene; None when the
-    store does not record it (a study over a scene file)."""
+def _base_key(store, params: dict):
+    """The base part of the member ids of ``store`` (a local path or a tree,
+    ``verify.store_tree``; see ``identity.member_id``): "builder" for members of a
+    builder, "scene:<digest>" for a sweep over a Scene; None when the store does not
+    record it (a study over a scene file)."""
     if "builder" in params:
         return "builder"
-    root = Path(store) / "zarr.json"
+    root = V.root_of(store) / "zarr.json"
+    if not isinstance(root, Path):      # at a URL: read each time (no modification time to key a cache)
+        return _base_of(V.read_json(root)[0])
     try:
         stamp = (str(root), root.stat().st_mtime_ns, root.stat().st_size)
     except OSError:
         return None
     if stamp not in _BASES:            # the root's zarr.json (with the consolidated metadata) read once
-        doc, _ = V.read_json(root)
-        try:
-            base = json.loads((doc or {}).get("attributes", {}).get("study", "{}")).get("base")
-        except (ValueError, AttributeError, TypeError):
-            base = None
-        digest = base.get("scene_digest") if isinstance(base, dict) else None
         _BASES.clear()
-        _BASES[stamp] = f"scene:{digest}" if isinstance(digest, str) else None
+        _BASES[stamp] = _base_of(V.read_json(root)[0])
     return _BASES[stamp]
+
+
+def _base_of(doc):
+    try:
+        base = json.loads((doc or {}).get("attributes", {}).get("study", "{}")).get("base")
+    except (ValueError, AttributeError, TypeError):
+        base = None
+    digest = base.get("scene_digest") if isinstance(base, dict) else None
+    return f"scene:{digest}" if isinstance(digest, str) else None
 
 
 def _same(given, stored) -> bool:
@@ -64,14 +69,14 @@ def _same(given, stored) -> bool:
 def check_params(store, mid: str, report) -> None:
     """Add the damage of member ``mid`` whose parameters (attr ``member_params``) are not
     those it ran with: their digest is not its id, or a scene path among them is not its
-    scene's value."""
-    store = os.fspath(store)
-    meta = Path(store) / V.MEMBERS / mid / "zarr.json"
+    scene's value. ``store``: a local path or a tree (``verify.store_tree``)."""
+    store = V.root_of(store)
+    meta = store / V.MEMBERS / mid / "zarr.json"
     doc, _ = V.read_json(meta)
     if doc is None:
         return                              # named by the run's checks
     attrs = doc.get("attributes", {}) or {}
-    remedy = V.member_remedy(store)
+    remedy = V.member_remedy(str(store))
 
     def damage(what):
         put(report, V.Damage(str(meta), f"{what}: changed after the run", mid, remedy))

@@ -15,6 +15,7 @@ from .checks import put
 from .lock import LOCK_NAME
 from .read import member_coords, member_status
 from .store import MEMBERS, consolidate, error_line, open_group, store_str
+from ..output.stores import zarr_of
 
 
 def write_member_table(store: str):
@@ -38,7 +39,7 @@ def write_member_table(store: str):
         if status:
             coords = member_coords(status)
             table = xr.Dataset(coords=coords, attrs=attrs)
-            table.to_zarr(store, mode="a", consolidated=False, zarr_format=3, encoding=encoding(table))
+            table.to_zarr(zarr_of(store), mode="a", consolidated=False, zarr_format=3, encoding=encoding(table))
             names = " ".join(c for c in coords if c != "member")
             open_group(store, "a", consolidated=False).update_attributes({**attrs, "coordinates": names})
         else:
@@ -55,11 +56,12 @@ def check_table(store, report) -> None:
     """Add the damage of the member table at the root of ``store`` (what
     ``xr.open_zarr(STORE)`` shows) that does not say what the member groups say: other
     members, or another status or parameter of a member. Not while a sweep holds the
-    store (it rewrites the table when it ends)."""
+    store (it rewrites the table when it ends). ``store``: a local path, or a tree
+    (``verify.store_tree``)."""
     import xarray as xr
 
-    store = store_str(store)
-    p = Path(store)
+    p = V.root_of(store)
+    store = store_str(p) if isinstance(p, Path) else str(p)
     doc, _ = V.read_json(p / "zarr.json")
     if doc is None or "coordinates" not in (doc.get("attributes") or {}):
         return                              # no table yet (a first sweep killed): nothing to compare
@@ -80,7 +82,7 @@ def check_table(store, report) -> None:
                                              f"(xr.open_zarr) shows", None, remedy))
 
     try:
-        table = xr.open_zarr(store, consolidated=False)
+        table = xr.open_zarr(zarr_of(store), consolidated=False)
         listed = _values(table["member"]) if "member" in table.coords else []
     except Exception as exc:  # noqa: BLE001 - damaged arrays of the table
         return damage("member", f"cannot be read ({error_line(exc)})")

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, StoreError
-from ..output.stores import is_url
+from ..output.stores import store_for, zarr_of
 
 
 def _nc_attr(value):
@@ -187,14 +187,12 @@ def _read_error(store, exc) -> StoreError:
     """A StoreError naming the damaged files of ``store`` (found by ``cracklab.output.verify``)
     for an error met while reading its data."""
     from .store import error_line
+    from .verify import verify
 
-    if not is_url(store):
-        from .verify import verify
-
-        with contextlib.suppress(Exception):
-            report = verify(store)
-            if not report.ok:
-                return StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+    with contextlib.suppress(Exception):
+        report = verify(store)
+        if not report.ok:
+            return StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
     return StoreError(store, f"cannot be read ({error_line(exc)}); cracklab verify {store} names the damaged "
                              f"files")
 
@@ -267,18 +265,16 @@ def export_netcdf(store, out, *, member=None, allow_partial=False, overwrite=Tru
     else:
         if member:
             raise InputError("member", f"{store} is a single run, not an ensemble")
-        if not is_url(store):
-            from ..output.verify import check_run
+        from ..output.verify import check_run
 
-            report = check_run(store, read=False)
-            if not report.ok:
-                raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
+        report = check_run(store_for(store).tree(), read=False)     # a URL: its keys listed once
+        if not report.ok:
+            raise StoreError(store, f"is damaged: {report.first()}; {report.remedy()}")
         try:
-            ds = xr.open_zarr(store, consolidated=False)
+            ds = xr.open_zarr(zarr_of(store), consolidated=False)
         except (ValueError, KeyError, OSError) as exc:
             raise _read_error(store, exc) from None
-        if not is_url(store):
-            ds, _ = _trimmed(ds, store, allow_partial, f"the run in {store}")
+        ds, _ = _trimmed(ds, store, allow_partial, f"the run in {store}")
     ds = netcdf_ready(ds)
     out = Path(out)
     if out.exists() and not overwrite and not _same_content(out, ds):

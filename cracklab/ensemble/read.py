@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import InputError, StoreError
 from .identity import FORMAT, canonical_json, coordinate_name
 from .store import MEMBERS, check_metadata, error_line, member_attrs, open_group, store_kind, store_str
-from ..output.stores import is_url
+from ..output.stores import is_url, zarr_of
 
 
 def member_status(store) -> list[dict]:
@@ -63,12 +63,12 @@ UNREADABLE = "the member's metadata cannot be read"
 def _member_damage(store, mid):
     """None, or a StoreError for the complete member ``mid`` whose metadata or chunk
     listing is damaged, or whose metadata does not match what is stored (cheap: no data is
-    read but the scene's inputs; a changed byte raises when read)."""
-    if is_url(store):
-        return None
+    read but the scene's inputs; a changed byte raises when read). At a URL the same
+    checks, over the member's keys only (one listing)."""
+    from ..output.verify import store_tree
     from .checks import check_member
 
-    report = check_member(store, mid, read=False)
+    report = check_member(store_tree(store, members=[mid]) if is_url(store) else store, mid, read=False)
     if report.ok:
         return None
     return StoreError(store, f"member {mid} is damaged: {report.first()}; rerun the sweep (cracklab sweep "
@@ -89,7 +89,7 @@ def open_member(store, member: str):
         if err is not None:
             raise err
     try:
-        return xr.open_zarr(store, group=f"{MEMBERS}/{member}", consolidated=False)
+        return xr.open_zarr(zarr_of(store), group=f"{MEMBERS}/{member}", consolidated=False)
     except FileNotFoundError:
         raise InputError("member", f"{member!r} is not a member of {store}") from None
     except (ValueError, KeyError, OSError) as exc:

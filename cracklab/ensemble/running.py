@@ -14,14 +14,13 @@ from pathlib import Path
 from ..errors import InputError, SchedulerError
 from ..scenes.registry import builder_name, resolve_builder
 from .identity import canonical, canonical_json, scene_digest
-from .lock import store_lock
 from .planning import as_sweep, build_scene, check_paths, check_section_keys, plan, split_params
 from .spec import Builder, Member, Sweep, SweepResult
 from .store import (MEMBERS, SWAP_TAG, check_store, damage_of, error_line, init_store, is_complete,
                     member_attrs, member_path, open_group, record_failure, store_str, swap_in,
                     traceback_summary)
 from .members_table import write_member_table
-from ..output.stores import is_url
+from ..output.stores import SweepLockLost, guarded, is_url, store_for
 
 
 def cores() -> int:
@@ -287,12 +286,15 @@ def run(base_scene, sweep, store, *, client=None, resume=True, scheduler=None, w
             client = stack.enter_context(job_cluster(cluster, cluster_options, workers=n,
                                                      member_bytes=max(known) if known and check_memory else None,
                                                      progress=progress is not False))
-        with store_lock(store):
+        where = store_for(store)
+        lock = where.lock()             # the sweep lock (ensemble.lock.store_lock)
+        with lock:
             return _run_locked(base_scene, sweep, members, store, spec, t0, client=client, resume=resume,
                                scheduler=scheduler, workers=workers, progress=progress,
                                fft_threads=fft_threads, replace=replace, memory_limit=memory_limit,
                                address=address, check_disk=check_disk,
-                               batch=f"{kind} jobs" if cluster is not None else None)
+                               batch=f"{kind} jobs" if cluster is not None else None, lock=lock,
+                               guard=where.write_guard(lock))
 
 
 def sweep_output(outputs):
@@ -384,9 +386,22 @@ def _clear(store: str):
     group(store, "a").update_attributes({"members": []})
 
 
+def _lost(lock) -> bool:
+    """Whether the sweep holding ``lock`` lost it (taken over by another sweep)."""
+    return bool(getattr(lock, "lost", False))
+
+
+def _stop_lost(store, lock):
+    """The SweepLockLost of a sweep whose lock was taken over: it stops, writing nothing more."""
+    raise SweepLockLost(store, f"the sweep lock {getattr(lock, 'url', '')} was taken over by another sweep while this "
+                               f"one ran (its heartbeat could not be written in time); this sweep stopped and its "
+                               f"members stop before their next write: when the other sweep ends, cracklab verify "
+                               f"{store}, and rerun this sweep to complete it")
+
+
 def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, scheduler, workers,
                 progress, fft_threads, replace=False, memory_limit="auto", address=None,
-                check_disk=True, batch=None) -> SweepResult:
+                check_disk=True, batch=None, lock=None, guard=None) -> SweepResult:
     from ..model.scene import Scene
 
     if replace:
@@ -423,7 +438,11 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         from tqdm import tqdm
 
         for m in tqdm(todo, desc="members", unit="member", disable=not progress, file=sys.stderr):
-            r = _run_member(store, m, base, fft_threads, own(m), check_disk=check_disk)
+            if _lost(lock):
+                _stop_lost(store, lock)
+            r = _run_member(store, m, base, fft_threads, own(m), check_disk=check_disk, guard=guard)
+            if r["status"] == "lost":
+                _stop_lost(store, lock)
             if r["status"] != "complete":
                 result.failed[m.id] = r.get("error", "failed")
     elif todo:
@@ -440,13 +459,17 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         with dask_client(client, scheduler, workers, len(todo), memory_limit=memory_limit) as c:
             base_arg = c.scatter(base, broadcast=True) if base is not None else None
             futures = {c.submit(_run_member, store, m, base_arg, fft_threads, own(m), check_disk=check_disk,
-                                pure=False,
+                                guard=guard, pure=False,
                                 key=f"cracklab-member-{m.id}-{os.urandom(3).hex()}"): m for m in todo}
             bar = tqdm(total=len(todo), desc="members", unit="member", disable=not progress,
                        file=sys.stderr, dynamic_ncols=True)
+            if lock is not None and hasattr(lock, "on_lost"):       # lost: no member left to wait for
+                lock.on_lost.append(lambda: [f.cancel() for f in futures])
             try:
                 for fut in as_completed(futures):
                     m = futures[fut]
+                    if _lost(lock):
+                        _stop_lost(store, lock)
                     try:
                         r = fut.result()
                     except Exception as exc:  # noqa: BLE001 - the worker died, or the task was lost
@@ -456,6 +479,8 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                     # forget the task at once: were the worker that holds its (small) result
                     # to die later, dask would otherwise run the member again and rewrite it
                     fut.release()
+                    if r["status"] == "lost":       # its member found the lock taken over first
+                        _stop_lost(store, lock)
                     if r["status"] != "complete":
                         result.failed[m.id] = r.get("error", "failed")
                     bar.update(1)
@@ -467,6 +492,8 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                 raise
             finally:
                 bar.close()
+    if _lost(lock):
+        _stop_lost(store, lock)
     for m in todo:      # what the result says complete is complete in the store
         if m.id not in result.failed and not is_complete(store, m.id):
             error = "IncompleteMember: the member's group is not marked complete after the run"
@@ -490,9 +517,15 @@ def _spec_of(base_scene, sweep: Sweep) -> dict:
 
 
 # ---------------------------------------------------------------------------- the worker task
-def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, check_disk=True) -> dict:
+def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, check_disk=True,
+                guard=None) -> dict:
     """Worker task: build, run and write one member; mark it complete last. Never raises
     for a member's own failure: the error goes to the member's attrs and the result.
+
+    ``guard``: the sweep lock's write guard (``Store.write_guard``), checked before the
+    member's writes (``guarded``) and always before it is marked complete: a member whose
+    sweep lost the lock (killed, or taken over) stops and writes nothing more, not even
+    its failure (status "lost" in the result).
 
     A member whose group is complete (a ``resume=False`` sweep) is replaced atomically
     for readers: the new run is written to a hidden sibling group and swapped in when
@@ -507,9 +540,18 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, 
     worker = f"{socket.gethostname()}:{os.getpid()}"
     meta = {"member_id": member.id, "member_params": canonical_json(member.params),
             "member_swept": json.dumps(list(member.swept)), "worker": worker}
+    with guarded(guard):
+        return _member_task(store, member, base, fft_threads, builders, check_disk, guard, t0, path, worker, meta)
+
+
+def _member_task(store, member, base, fft_threads, builders, check_disk, guard, t0, path, worker, meta) -> dict:
+    """The body of ``_run_member``, its writes guarded."""
     target = path
     try:
         from ..output.simulate import simulate
+
+        if guard is not None:
+            guard.check(force=True)          # a task started by a sweep that is gone: nothing written
 
         old = member_attrs(store, member.id)
         if old is not None and old.get("complete") is True:
@@ -524,10 +566,15 @@ def _run_member(store: str, member: Member, base, fft_threads=1, builders=None, 
         g = open_group(target, "a")
         elapsed = time.perf_counter() - t0
         g.update_attributes({**meta, "status": "complete", "elapsed_s": round(elapsed, 3)})
+        if guard is not None:
+            guard.check(force=True)          # the sweep still holds the store: commit
         g.update_attributes({"complete": True})   # last: the member is complete only now
         if target != path:
             swap_in(target, path)
         return {"id": member.id, "status": "complete", "elapsed": elapsed, "worker": worker}
+    except SweepLockLost as exc:        # orphaned: nothing more is written (the lock's holder runs it)
+        return {"id": member.id, "status": "lost", "error": error_line(exc), "elapsed": time.perf_counter() - t0,
+                "worker": worker}
     except Exception as exc:  # noqa: BLE001 - recorded, the sweep goes on
         elapsed = time.perf_counter() - t0
         error, tb = error_line(exc), traceback_summary(exc)

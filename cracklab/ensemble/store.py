@@ -12,7 +12,7 @@ import warnings
 from pathlib import Path
 
 from ..errors import InputError, StoreError
-from ..output.stores import is_url, store_for
+from ..output.stores import is_url, store_for, zarr_of
 from .identity import FORMAT, canonical_json
 from .lock import LOCK_NAME
 from .spec import Member
@@ -38,12 +38,13 @@ def open_group(path, mode, *, consolidated=None):
     """The Zarr group at ``path``; created as Zarr v3 in a writing mode. Read ("r") from its
     own metadata, never from consolidated metadata (which a running sweep may have made
     stale). ``consolidated=False`` in a writing mode: the group's next metadata write
-    drops its consolidated metadata."""
+    drops its consolidated metadata. Opened through the store protocol (``zarr_of``: a
+    URL without a listings cache, its writes guarded while a member runs)."""
     import zarr
 
     if mode in ("w", "a", "w-"):
-        return zarr.open_group(path, mode=mode, zarr_format=3, use_consolidated=consolidated)
-    return zarr.open_group(path, mode=mode, use_consolidated=False)
+        return zarr.open_group(zarr_of(path), mode=mode, zarr_format=3, use_consolidated=consolidated)
+    return zarr.open_group(zarr_of(path), mode=mode, use_consolidated=False)
 
 
 def consolidate(path):
@@ -54,7 +55,7 @@ def consolidate(path):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        zarr.consolidate_metadata(path)
+        zarr.consolidate_metadata(zarr_of(path))
 
 
 def is_ensemble(store) -> bool:
@@ -71,7 +72,9 @@ def store_kind(store) -> str:
     anything else (no such path, a file, a directory or Zarr group that cracklab did
     not write, an ensemble store of a newer format)."""
     s = store_str(store)
-    if not is_url(s) and not Path(s).exists():
+    if is_url(s):
+        store_for(s).check(exists=True)     # its scheme, credentials, bucket and zarr.json: one line each
+    elif not Path(s).exists():
         raise InputError("store", f"{s} does not exist")
     check_metadata(s, Path(s) / "zarr.json" if not is_url(s) else None,
                     "restore it, or delete the store and run it again")
@@ -120,7 +123,7 @@ def check_store(store: str):
         if p.exists() and not p.is_dir():
             raise InputError("store", f"{store} is a file, not a Zarr store; choose another path")
     try:
-        root = zarr.open_group(store, mode="r", use_consolidated=False)
+        root = zarr.open_group(zarr_of(store), mode="r", use_consolidated=False)
     except Exception:  # noqa: BLE001 - no group there (yet)
         root = None
     if root is None:
@@ -169,10 +172,8 @@ def init_store(store: str, study_spec: dict, members: list[Member], axes=()):
 # ---------------------------------------------------------------------------- members
 def member_attrs(store, mid):
     """The attrs of member ``mid``'s group, or None when it is missing or unreadable."""
-    import zarr
-
     try:
-        return dict(zarr.open_group(member_path(store, mid), mode="r", use_consolidated=False).attrs)
+        return dict(open_group(member_path(store, mid), "r").attrs)
     except Exception:  # noqa: BLE001 - missing or unreadable group
         return None
 
@@ -187,12 +188,12 @@ def damage_of(store, member: Member):
     """None when the complete member ``member`` is sound (every chunk read and checked, its
     metadata and parameters against what is stored: ``checks.check_member``); else a line
     naming the damage, after marking the member damaged and incomplete (so that no reader
-    takes it, and the sweep runs it again)."""
-    if is_url(store):
-        return None             # only local stores are verified
+    takes it, and the sweep runs it again). At a URL the same checks, over the member's
+    keys only (``verify.store_tree``)."""
+    from ..output.verify import store_tree
     from .checks import check_member
 
-    report = check_member(store, member.id)
+    report = check_member(store_tree(store, members=[member.id]) if is_url(store) else store, member.id)
     if report.ok:
         return None
     line = report.first()

@@ -397,10 +397,13 @@ class RunProgress:
 
 def run_progress(path) -> RunProgress:
     """The ``RunProgress`` of the run store (or ensemble member group) at ``path``, read
-    lazily: the attrs, then for an unfinished run one chunk at a time (``written_snapshots``)."""
+    lazily: the attrs, then for an unfinished run one chunk at a time (``written_snapshots``);
+    ``path``: a local path or a URL (read through its ``Store.zarr_store``)."""
     import zarr
 
-    g = zarr.open_group(str(path), mode="r")
+    from .stores import zarr_of
+
+    g = zarr.open_group(zarr_of(path), mode="r")
     attrs = dict(g.attrs)
     status = attrs.get("cracklab_status", "complete" if "scene" in attrs else "running")
     if attrs.get("status") == "failed" and status != "complete":

@@ -96,6 +96,31 @@ class StoredTree:
             dirs = {k.rsplit("/", n)[0] for k in keys for n in range(1, k.count("/") + 1)}
         self.keys, self.dirs = keys, dirs
 
+    @classmethod
+    def listing(cls, fs, path: str, url: str, prefixes) -> "StoredTree":
+        """The tree at ``path`` with only the keys below ``prefixes`` (paths below it) listed,
+        and the keys right at its root (its zarr.json, the sweep lock): a view of a few
+        members of a large store, one listing each."""
+        root = path.rstrip("/")
+        keys = set()
+        for prefix in prefixes:
+            try:
+                keys |= set(fs.find(f"{root}/{prefix.strip('/')}"))
+            except FileNotFoundError:
+                pass
+        try:
+            keys |= {e["name"] for e in fs.ls(root, detail=True, refresh=True) if e.get("type") == "file"}
+        except FileNotFoundError:
+            pass
+        dirs = {k.rsplit("/", n)[0] for k in keys for n in range(1, k.count("/") + 1)}
+        return cls(fs, root, url, keys, dirs)
+
+    def zarr_store(self):
+        """The zarr store of the node at this path (``Store.zarr_store`` of its URL)."""
+        from .stores import store_for
+
+        return store_for(self.url).zarr_store()
+
     def _at(self, path, url):
         return StoredTree(self.fs, path, url, self.keys, self.dirs)
 

@@ -141,6 +141,38 @@ class Report:
         return shown + (f"; and {more} more (cracklab verify lists them)" if more > 0 else "")
 
 
+# ---------------------------------------------------------------------------- where
+def root_of(store):
+    """The tree of ``store`` as given: an ``objectstore.StoredTree`` as is, anything else
+    as a local ``Path``."""
+    return store if hasattr(store, "subdirs") else Path(os.fspath(store)).expanduser()
+
+
+def store_tree(store, members=None):
+    """The read-only view of ``store`` the checks read: a local ``Path``, or for a URL an
+    ``objectstore.StoredTree`` (the URL checked first: ``Store.check``, a StoreError naming
+    it). ``members``: the ids of the only members to list (with the root's metadata and
+    the sweep lock), for the check of a few members of a large store at a URL."""
+    from .objectstore import StoredTree
+    from .stores import store_for
+
+    if hasattr(store, "subdirs"):
+        return store
+    if not is_url(store):
+        return Path(os.fspath(store)).expanduser()
+    url = os.fspath(store).rstrip("/")
+    fs, path = store_for(url).check(exists=True)
+    if members is None:
+        return StoredTree(fs, path, url)
+    return StoredTree.listing(fs, path, url, [f"{MEMBERS}/{m}" for m in members])
+
+
+def _zarr(p):
+    """What zarr opens for the node at ``p`` (a local path, or a StoredTree: its URL
+    through its ``Store.zarr_store``, no listings cache)."""
+    return p.zarr_store() if hasattr(p, "zarr_store") else str(p)
+
+
 # ---------------------------------------------------------------------------- metadata
 def read_json(path: Path):
     """(document, None) or (None, what is wrong) for a metadata file."""
@@ -207,7 +239,7 @@ def _check_array(adir: Path, name: str, *, read: bool, t_extent, report: Report,
         report.damage.append(Damage(str(adir / "zarr.json"), f"{name} is not an array", member))
         return
     try:
-        arr = zarr.open_array(store=str(adir), mode="r")
+        arr = zarr.open_array(store=_zarr(adir), mode="r")
     except Exception as exc:  # noqa: BLE001 - any unreadable metadata is damage
         report.damage.append(Damage(str(adir / "zarr.json"), f"array {name}: metadata cannot be used ({exc})",
                                     member))
@@ -352,7 +384,7 @@ def stored_inputs(p: Path, names) -> dict | None:
     out = {}
     for name in names:
         try:
-            out[name] = np.asarray(zarr.open_array(store=str(p / name), mode="r")[...])
+            out[name] = np.asarray(zarr.open_array(store=_zarr(p / name), mode="r")[...])
         except Exception:  # noqa: BLE001 - missing or damaged: the array checks name it
             return None
     return out
@@ -509,8 +541,9 @@ def check_run(path, *, read: bool = True, snapshots: int | None = None, final: b
 
 # ---------------------------------------------------------------------------- an ensemble
 def check_member(store, mid: str, *, read: bool = True, report: Report | None = None) -> Report:
-    """Check one complete member of an ensemble store (its group and run)."""
-    p = Path(store) / MEMBERS / mid
+    """Check one complete member of an ensemble store (its group and run); ``store``: a
+    local path or a tree (``store_tree``)."""
+    p = root_of(store) / MEMBERS / mid
     rep = report if report is not None else Report(str(p), "run")
     doc, why = read_json(p / "zarr.json")
     if doc is None:
@@ -520,7 +553,9 @@ def check_member(store, mid: str, *, read: bool = True, report: Report | None = 
 
 
 def check_ensemble(store, *, read: bool = True) -> Report:
-    p = Path(store)
+    """Check an ensemble store (a local path or a tree, ``store_tree``): each complete
+    member, and the root's consolidated metadata against the members present."""
+    p = root_of(store)
     rep = Report(str(p), "ensemble")
     doc, why = read_json(p / "zarr.json")
     if doc is None:
@@ -566,16 +601,13 @@ def check_ensemble(store, *, read: bool = True) -> Report:
 
 
 def verify(store, *, read: bool = True) -> Report:
-    """The ``Report`` of a run or ensemble store: a local path, or the URL of a run's
-    store (``s3://bucket/run.zarr``; its keys listed once, every chunk read over the
-    network; checked first by its ``Store.check``)."""
+    """The ``Report`` of a run or ensemble store: a local path, or a URL
+    (``s3://bucket/ens.zarr``; its keys listed once, every chunk read over the network;
+    checked first by its ``Store.check``), or its tree (``store_tree``)."""
     from ..errors import StoreError
-    from .objectstore import StoredTree
-    from .stores import store_for
 
-    if is_url(store):
-        url = os.fspath(store).rstrip("/")
-        p = StoredTree(*store_for(url).check(exists=True), url)
+    if hasattr(store, "subdirs") or is_url(store):
+        p = store_tree(store)
     else:
         p = Path(os.fspath(store)).expanduser()
         if not p.is_dir():
@@ -587,9 +619,6 @@ def verify(store, *, read: bool = True) -> Report:
         return rep
     attrs = doc.get("attributes", {}) or {}
     if "cracklab_ensemble" in attrs:
-        if isinstance(p, StoredTree):
-            raise StoreError(p, "is an ensemble store; cracklab verify checks ensembles on a local disk only for "
-                                "now: copy the store to a local path (e.g. aws s3 sync) and verify it there")
         return check_ensemble(p, read=read)
     if "scene" in attrs or "cracklab_run_format" in attrs:
         return check_run(p, read=read)

@@ -165,16 +165,6 @@ def test_verify_reads_every_chunk_of_a_run_on_the_object_store(s3_env, tmp_path)
     assert "delta_2/c/0/0/0" not in res.output
 
 
-def test_verify_of_an_ensemble_on_the_object_store_says_what_to_do(s3_env):
-    import zarr
-
-    bucket = s3_env.make_bucket()
-    url = f"s3://{bucket}/ens.zarr"
-    zarr.open_group(url, mode="w", zarr_format=3).update_attributes({"cracklab_ensemble": 1})
-    line = one_error_line(["verify", url])
-    assert url in line and "ensemble" in line and "local path" in line, line
-
-
 def test_a_scheme_whose_package_is_not_installed_names_it(tmp_path):
     pytest.importorskip("fsspec")
     try:

@@ -11,14 +11,43 @@ of storage is one subclass in a file of its own, chosen from the path or URL by
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import os
 from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Callable, ClassVar
 
+from ...errors import StoreError
+
 #: the group of a run's store that holds its checkpoint (a Zarr group: readers ignore it)
 CHECKPOINT_GROUP = "_checkpoint"
 CHECKPOINT_GROUP_DOC = '{"zarr_format": 3, "node_type": "group", "attributes": {}}'
+
+
+class SweepLockLost(StoreError):
+    """The sweep a member was started by no longer holds the store's lock (it was killed,
+    or another sweep took the lock over): the member stops before its next write."""
+
+
+#: the guard of the writes of the member running in this thread (``guarded``): every write
+#: into a store at a URL made through ``Store.zarr_store`` while it is set checks it first
+_GUARD: contextvars.ContextVar = contextvars.ContextVar("cracklab_write_guard", default=None)
+
+
+@contextlib.contextmanager
+def guarded(guard):
+    """Run the block with ``guard`` (an object with ``check(force=False)``, raising
+    ``SweepLockLost``) checked before the writes of the stores it opens; None: unguarded."""
+    token = _GUARD.set(guard)
+    try:
+        yield guard
+    finally:
+        _GUARD.reset(token)
+
+
+def current_guard():
+    """The guard set by ``guarded`` in this thread (None when there is none)."""
+    return _GUARD.get()
 
 
 def is_url(store) -> bool:
@@ -78,6 +107,12 @@ class Store(ABC):
         """A context holding this store for one sweep at a time; yields what holds it
         (None: this kind of storage is not locked)."""
         return contextlib.nullcontext()
+
+    def write_guard(self, lock):
+        """What a sweep's members check before they write (``guarded``): that the sweep
+        holding ``lock`` (what ``lock()`` returned, entered) still holds the store; None
+        where members cannot be orphaned from their sweep's lock."""
+        return None
 
     # -- the layout of a run: what the resume of a killed run needs ----------------------
     def tree(self):

@@ -25,10 +25,23 @@ Other fsspec schemes have no conditional write: the lock is written, then read b
 after ``LOCK_SETTLE_S``; a sweep whose token is not the one read back gives way. Two
 sweeps that start within the settle time of each other can both read their own token
 only when the store reorders writes (a window of about one write's latency); see
-docs/guide/reliability.md, "Object storage"."""
+docs/guide/reliability.md, "Object storage".
+
+The members of a sweep stop when their sweep loses the lock (``write_guard``): each
+member carries the lock's token, and before a write into the store (at most every
+``GUARD_EVERY_S``, and always before it marks itself complete) it reads the lock. It stops
+(``SweepLockLost``, nothing more written, not even its failure) when the lock is gone,
+holds another sweep's token, or has had no heartbeat for ``LOCK_STALE_S / 2``: its sweep
+was killed (a driver killed with ``kill -9`` leaves the workers of a dask scheduler
+running its tasks). The last comes before any other sweep may take the lock over by its
+age; a sweep that takes over the lock of a process gone from this host at once waits
+``GUARD_EVERY_S`` before it goes on, so that every orphaned member has read the new token
+before the new sweep writes."""
 from __future__ import annotations
 
+import asyncio
 import contextlib
+import functools
 import hashlib
 import json
 import os
@@ -40,7 +53,7 @@ import warnings
 from pathlib import Path
 
 from ...errors import StoreError, StoreWarning
-from .base import CHECKPOINT_GROUP, CHECKPOINT_GROUP_DOC, Store
+from .base import CHECKPOINT_GROUP, CHECKPOINT_GROUP_DOC, Store, SweepLockLost, current_guard
 from .local import LOCK_NAME, StoreLocked, pid_alive
 
 POINTER = "checkpoint.json"
@@ -54,6 +67,8 @@ LOCK_STALE_S = 180.0
 CONDITIONAL = {"s3", "s3a"}
 #: without conditional writes: seconds between writing the lock and reading it back
 LOCK_SETTLE_S = 1.0
+#: a sweep's member reads its sweep's lock before a write at most every this many seconds
+GUARD_EVERY_S = 5.0
 
 
 class FsspecStore(Store):
@@ -100,10 +115,16 @@ class FsspecStore(Store):
 
     def zarr_store(self):
         """zarr's fsspec store at the URL, without a listings cache (s3fs caches listings
-        otherwise, and would list keys that another client deleted)."""
+        otherwise, and would list keys that another client deleted); inside ``guarded``,
+        one whose writes check the guard first."""
         from zarr.storage import FsspecStore as ZarrFsspec
 
-        return ZarrFsspec.from_url(self.target, storage_options={"use_listings_cache": False})
+        z = ZarrFsspec.from_url(self.target, storage_options={"use_listings_cache": False})
+        guard = current_guard()
+        if guard is None:
+            return z
+        return _guarded_zarr()(fs=z.fs, path=z.path, read_only=z.read_only, allowed_exceptions=z.allowed_exceptions,
+                               guard=guard)
 
     def key(self, name: str) -> str:
         """The path in the file system of ``name`` below the store's root."""
@@ -111,6 +132,10 @@ class FsspecStore(Store):
 
     def lock(self):
         return _ObjectLock(self)
+
+    def write_guard(self, lock):
+        """A ``_LockGuard`` of the token of ``lock`` (an entered ``_ObjectLock``)."""
+        return _LockGuard(self.target, lock.me["token"], every=GUARD_EVERY_S, orphan_s=LOCK_STALE_S / 2)
 
     # -- the layout of a run --------------------------------------------------------------
     def tree(self):
@@ -158,6 +183,9 @@ class FsspecStore(Store):
                                           f"unreadable ({exc}); run again without resume") from None
 
     def write_checkpoint(self, fill, before_commit=None) -> None:
+        guard = current_guard()
+        if guard is not None:
+            guard.check()
         fs, _ = self.fs
         group = self.key(CHECKPOINT_GROUP)
         if not fs.exists(f"{group}/zarr.json"):
@@ -172,6 +200,8 @@ class FsspecStore(Store):
             fs.put_file(str(local), f"{group}/{name}")
         if before_commit is not None:
             before_commit()
+        if guard is not None:
+            guard.check()
         pointer = {"format": POINTER_FORMAT, "object": name, "bytes": size, "sha256": digest}
         fs.pipe_file(f"{group}/{POINTER}", json.dumps(pointer).encode())     # the commit
         self._drop_states(keep=name)
@@ -239,6 +269,8 @@ class _ObjectLock:
                    "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "token": os.urandom(8).hex()}
         self.etag = None
         self.lost = False
+        #: called (no arguments, from the heartbeat's thread) when the lock is lost
+        self.on_lost: list = []
         self._stop = threading.Event()
         self._beat = None
 
@@ -259,24 +291,7 @@ class _ObjectLock:
     def _read(self):
         """(holder's record or {} when unreadable, ETag, age in seconds of its last write)
         of the lock; None when there is none."""
-        fs, _ = self.store.fs
-        try:
-            info = fs.info(self.key)
-            body = fs.cat_file(self.key)
-        except FileNotFoundError:
-            return None
-        try:
-            doc = json.loads(body)
-            doc = doc if isinstance(doc, dict) else {}
-        except (ValueError, UnicodeDecodeError):
-            doc = {}
-        modified = info.get("LastModified") or info.get("mtime") or info.get("created")
-        try:
-            stamp = modified.timestamp() if hasattr(modified, "timestamp") else float(modified)
-            age = time.time() - stamp
-        except (TypeError, ValueError):
-            age = 0.0
-        return doc, info.get("ETag"), age
+        return _read_lock(self.store.fs[0], self.key)
 
     def _stale(self, doc: dict, age: float) -> bool:
         if doc.get("host") == socket.gethostname() and isinstance(doc.get("pid"), int) and \
@@ -324,13 +339,21 @@ class _ObjectLock:
                 except OSError:
                     continue
                 if self._mine():
-                    return
+                    return self._fence(age)
             else:
                 self._put()
                 time.sleep(LOCK_SETTLE_S)
                 if self._mine():
-                    return
+                    return self._fence(age)
         raise StoreLocked("store", f"{self.store.target}: could not take the sweep lock {self.url}; try again")
+
+    def _fence(self, age: float) -> None:
+        """After taking over the lock of a sweep whose heartbeat is younger than its
+        members' orphan age (its process gone from this host): wait until each of its
+        orphaned members has read the lock (they do before a write, at most
+        ``GUARD_EVERY_S`` apart) and stopped, before this sweep writes."""
+        if age <= LOCK_STALE_S / 2 + GUARD_EVERY_S:
+            time.sleep(GUARD_EVERY_S + 1.0)
 
     def _mine(self) -> bool:
         held = self._read()
@@ -355,11 +378,15 @@ class _ObjectLock:
                         continue            # still this sweep's (a network error): the next beat
                 except Exception:  # noqa: BLE001 - the store cannot be reached: the next beat
                     continue
-            # taken over (this sweep was thought gone): say so once, stop beating
+            # taken over (this sweep was thought gone): say so once, stop beating; the
+            # sweep stops (``on_lost``) and its members stop at their next write (their guard)
             self.lost = True
             warnings.warn(StoreWarning(f"store {self.store.target}: the sweep lock {self.url} was taken over by "
-                                       f"another sweep; the members this sweep still writes may be mixed with "
-                                       f"its: verify the store"), stacklevel=1)
+                                       f"another sweep; this sweep stops, and its members stop before their next "
+                                       f"write"), stacklevel=1)
+            for call in list(self.on_lost):
+                with contextlib.suppress(Exception):
+                    call()
             return
 
     def __enter__(self):
@@ -382,6 +409,106 @@ class _ObjectLock:
             elif self._mine():
                 fs.rm_file(self.key)
         return False
+
+
+def _read_lock(fs, key: str):
+    """(holder's record or {} when unreadable, ETag, age in seconds of its last write) of
+    the lock object at ``key``; None when there is none."""
+    try:
+        info = fs.info(key)
+        body = fs.cat_file(key)
+    except FileNotFoundError:
+        return None
+    try:
+        doc = json.loads(body)
+        doc = doc if isinstance(doc, dict) else {}
+    except (ValueError, UnicodeDecodeError):
+        doc = {}
+    modified = info.get("LastModified") or info.get("mtime") or info.get("created")
+    try:
+        stamp = modified.timestamp() if hasattr(modified, "timestamp") else float(modified)
+        age = time.time() - stamp
+    except (TypeError, ValueError):
+        age = 0.0
+    return doc, info.get("ETag"), age
+
+
+class _LockGuard:
+    """What a member of a sweep into a URL checks before it writes (module docstring):
+    that the lock at ``<target>/.cracklab-sweep.lock`` still holds its sweep's ``token``
+    and had a heartbeat within ``orphan_s``. Sent to the workers with each member (its
+    file system is made again there)."""
+
+    def __init__(self, target: str, token: str, *, every: float, orphan_s: float):
+        self.target, self.token, self.every, self.orphan_s = target, token, every, orphan_s
+        self.url = f"{target}/{LOCK_NAME}"
+        self._fs = None
+        self._last = None
+
+    def __getstate__(self):
+        return {**self.__dict__, "_fs": None, "_last": None}
+
+    def _lost(self, why: str):
+        raise SweepLockLost(self.target, f"{why}; this member stopped before its next write (nothing more written "
+                                         f"by it): the sweep that holds the store, or the next one, runs it")
+
+    def check(self, force: bool = False) -> None:
+        """Raise ``SweepLockLost`` when the sweep no longer holds the store; reads the
+        lock at most every ``every`` seconds (always with ``force``)."""
+        now = time.monotonic()
+        if not force and self._last is not None and now - self._last < self.every:
+            return
+        if self._fs is None:
+            from ..objectstore import filesystem
+
+            self._fs = filesystem(self.target)
+        fs, path = self._fs
+        held = _read_lock(fs, f"{path.rstrip('/')}/{LOCK_NAME}")
+        if held is None:
+            self._lost(f"its sweep's lock {self.url} is gone (the sweep ended, or the lock was deleted)")
+        doc, _, age = held
+        if doc.get("token") != self.token:
+            holder = f"pid {doc.get('pid')} on {doc.get('host')}" if doc else "another process"
+            self._lost(f"its sweep's lock {self.url} was taken over by another sweep ({holder})")
+        if age > self.orphan_s:
+            self._lost(f"its sweep's lock {self.url} has had no heartbeat for {age:.0f} s: the sweep was killed")
+        self._last = now
+
+
+@functools.cache
+def _guarded_zarr():
+    """zarr's fsspec store whose writes check a guard first (made on first use)."""
+    from zarr.storage import FsspecStore as ZarrFsspec
+
+    class GuardedFsspec(ZarrFsspec):
+        def __init__(self, *args, guard, **kwargs):
+            super().__init__(*args, **kwargs)
+            self.guard = guard
+
+        def with_read_only(self, read_only: bool = False):
+            return type(self)(fs=self.fs, path=self.path, allowed_exceptions=self.allowed_exceptions,
+                              read_only=read_only, guard=self.guard)
+
+        async def _check(self):
+            await asyncio.to_thread(self.guard.check)
+
+        async def set(self, *args, **kwargs):
+            await self._check()
+            return await super().set(*args, **kwargs)
+
+        async def delete(self, *args, **kwargs):
+            await self._check()
+            return await super().delete(*args, **kwargs)
+
+        async def delete_dir(self, *args, **kwargs):
+            await self._check()
+            return await super().delete_dir(*args, **kwargs)
+
+        async def clear(self):
+            await self._check()
+            return await super().clear()
+
+    return GuardedFsspec
 
 
 def _bucket_key(fs, key: str) -> dict:

@@ -54,4 +54,14 @@ def store_for(target) -> Store:
     raise StoreError(s, f"no store for the scheme '{sch}://': cracklab writes to {accepted()}; check the URL")
 
 
-__all__ = ["ENTRY_POINT_GROUP", "OWN", "accepted", "is_url", "kinds", "scheme", "store_for"]
+def zarr_of(target):
+    """What zarr and xarray are given to read or write the store, or a group in it, at
+    ``target``: a local path as its text, a URL through its ``Store.zarr_store`` (no
+    listings cache: what another client wrote or deleted is seen at once; the writes
+    checked by the guard of the member running, ``guarded``). Every reader and writer of
+    an ensemble store opens it through here."""
+    s = os.fspath(target)
+    return store_for(s).zarr_store() if is_url(s) else s
+
+
+__all__ = ["ENTRY_POINT_GROUP", "OWN", "accepted", "is_url", "kinds", "scheme", "store_for", "zarr_of"]
