@@ -143,12 +143,6 @@ class StoredTree:
         dirs = {k.rsplit("/", n)[0] for k in keys for n in range(1, k.count("/") + 1)}
         return cls(fs, root, url, keys, dirs)
 
-    def zarr_store(self):
-        """The zarr store of the node at this path (``Store.zarr_store`` of its URL)."""
-        from .stores import store_for
-
-        return store_for(self.url).zarr_store()
-
     def _at(self, path, url):
         return StoredTree(self.fs, path, url, self.keys, self.dirs)
 
