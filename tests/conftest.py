@@ -53,6 +53,12 @@ SLOW = frozenset({
     "tests/ensemble/test_object_store_verify.py::test_readers_at_a_url_refuse_a_member_whose_metadata_was_changed",
     "tests/ensemble/test_object_store_verify.py::test_export_summary_and_plot_read_an_ensemble_at_a_url",
     "tests/ensemble/test_object_store_faults.py::test_members_of_a_sweep_whose_lock_was_taken_over_stop_writing",
+    "tests/ensemble/test_object_store_faults.py::"
+    "test_kill_9_of_the_sweep_driver_mid_member_then_the_rerun_completes_the_store",
+    "tests/ensemble/test_object_store_faults.py::test_the_s3_server_restarted_mid_sweep",
+    "tests/ensemble/test_object_store_faults.py::"
+    "test_the_store_unreachable_longer_than_the_retries_ends_the_sweep_in_one_line",
+    "tests/output/test_object_store_resume.py::test_the_store_unreachable_during_a_checkpoint",
     # sweeps on the batch jobs of a one-node Slurm (tests/slurm.py) and on dask processes started
     # by hand, writing to the S3 server
     "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",
@@ -146,6 +152,29 @@ def slurm_env(slurm_cluster, monkeypatch):
     for name, value in slurm_cluster.env.items():
         monkeypatch.setenv(name, value)
     yield slurm_cluster
+
+
+@pytest.fixture
+def s3_restartable(monkeypatch, tmp_path):
+    """An S3 API server of this test's own that can be restarted with its data, or made
+    unreachable for a while, on one endpoint (tests/s3_server.py, ``RestartableS3Server``),
+    the environment pointed at it; yields the server. fsspec's cached file systems are
+    dropped before and after (they hold the endpoint they were made with)."""
+    import s3fs
+
+    from s3_server import RestartableS3Server
+
+    server = RestartableS3Server(tmp_path).start()
+    for name, value in server.env(str(tmp_path)).items():
+        monkeypatch.setenv(name, value)
+    for name in ("AWS_PROFILE", "AWS_SESSION_TOKEN", "AWS_ENDPOINT_URL_S3", "AWS_MAX_ATTEMPTS", "AWS_RETRY_MODE"):
+        monkeypatch.delenv(name, raising=False)
+    s3fs.S3FileSystem.clear_instance_cache()
+    try:
+        yield server
+    finally:
+        server.stop()
+        s3fs.S3FileSystem.clear_instance_cache()
 
 
 def is_slow(nodeid: str) -> bool:

@@ -11,7 +11,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..errors import InputError, SchedulerError
+from ..errors import InputError, SchedulerError, StoreError
 from ..scenes.registry import builder_name, resolve_builder
 from .identity import canonical, canonical_json, scene_digest
 from .planning import as_sweep, build_scene, check_paths, check_section_keys, plan, split_params
@@ -494,7 +494,20 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
                 bar.close()
     if _lost(lock):
         _stop_lost(store, lock)
-    for m in todo:      # what the result says complete is complete in the store
+    failed = dict(result.failed)
+    try:
+        _record_end(store, members, todo, result, t0)
+    except Exception as exc:
+        if not is_url(store):
+            raise
+        raise _unreachable_at_end(store, members, result, failed, exc) from None
+    return result
+
+
+def _record_end(store, members, todo, result, t0) -> None:
+    """Check that what the result says complete is complete in the store, and write the
+    sweep's record (``last_run``), the member table and the consolidated metadata."""
+    for m in todo:
         if m.id not in result.failed and not is_complete(store, m.id):
             error = "IncompleteMember: the member's group is not marked complete after the run"
             record_failure(store, m, error, "")
@@ -504,7 +517,17 @@ def _run_locked(base_scene, sweep, members, store, spec, t0, *, client, resume, 
         "members": len(members), "ran": len(todo), "skipped": len(result.skipped),
         "failed": result.failed, "damaged": result.damaged, "elapsed_s": round(result.elapsed, 3)})})
     write_member_table(store)          # and the store's consolidated metadata, last
-    return result
+
+
+def _unreachable_at_end(store, members, result, failed, exc):
+    """The one-line StoreError of a sweep into a URL whose store could not be reached to
+    record its end (a network error, the server down): what ran (``failed``: the members
+    that failed as they ran), and what to do."""
+    why = f"; the first failure: {next(iter(failed.values()))}" if failed else ""
+    return StoreError(store, f"cannot be reached to record the end of the sweep ({error_line(exc)}); of "
+                             f"{len(members)} members: {len(result.ran) - len(failed)} ran, {len(result.skipped)} "
+                             f"already complete, {len(failed)} failed{why}; rerun the same command once the store "
+                             f"is reachable: it checks and skips the complete members and runs the others")
 
 
 def _spec_of(base_scene, sweep: Sweep) -> dict:

@@ -221,12 +221,12 @@ def record_failure(store, member: Member, error: str, tb: str, elapsed: float | 
     path = member_path(store, member.id)
     try:
         g = open_group(path, "a")
-    except Exception:  # noqa: BLE001
+        g.update_attributes({"member_id": member.id, "member_params": canonical_json(member.params),
+                             "member_swept": json.dumps(list(member.swept)), "status": "failed",
+                             "error": error, "traceback": tb, "complete": False,
+                             **({"elapsed_s": round(elapsed, 3)} if elapsed is not None else {})})
+    except Exception:  # noqa: BLE001 - the store unreachable: the member stays incomplete (run again)
         return
-    g.update_attributes({"member_id": member.id, "member_params": canonical_json(member.params),
-                    "member_swept": json.dumps(list(member.swept)), "status": "failed",
-                    "error": error, "traceback": tb, "complete": False,
-                    **({"elapsed_s": round(elapsed, 3)} if elapsed is not None else {})})
 
 
 # ---------------------------------------------------------------------------- atomic member replacement

@@ -8,6 +8,7 @@ A URL's scheme must name an fsspec implementation whose package is installed (s3
 cracklab never writes them anywhere, nor names them but by their variables."""
 from __future__ import annotations
 
+import contextlib
 import os
 
 from ..errors import StoreError
@@ -41,6 +42,33 @@ def filesystem(url: str):
     except ImportError as exc:
         raise StoreError(url, f"the scheme '{s}://' needs a package that is not installed ({exc})") from None
     return url_to_fs(url, skip_instance_cache=True, use_listings_cache=False)
+
+
+def network_errors() -> tuple:
+    """The exception classes of a store at a URL that cannot be reached (the server down
+    or unreachable, a connection cut or timed out): the client's retries, if any, are
+    spent. Those of packages not installed are left out."""
+    out: list = [ConnectionError, TimeoutError]
+    with contextlib.suppress(ImportError):
+        from botocore import exceptions as b
+
+        out += [b.ConnectionError, b.HTTPClientError]
+    with contextlib.suppress(ImportError):
+        import aiohttp
+
+        out += [aiohttp.ClientConnectionError, aiohttp.ClientPayloadError]
+    return tuple(out)
+
+
+def unreachable(store, exc, doing: str) -> StoreError | None:
+    """The one-line StoreError of ``exc``, met ``doing`` a write or read of the store at a
+    URL (its URL, or its ``Store``), when it is a network error (``network_errors``); None
+    otherwise."""
+    target = getattr(store, "target", store)
+    if not is_url(target) or not isinstance(exc, network_errors()):
+        return None
+    msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+    return StoreError(os.fspath(target), f"cannot be reached while {doing} ({type(exc).__name__}: {msg})")
 
 
 def _credentials_hint(url: str) -> str:
@@ -114,12 +142,6 @@ class StoredTree:
             pass
         dirs = {k.rsplit("/", n)[0] for k in keys for n in range(1, k.count("/") + 1)}
         return cls(fs, root, url, keys, dirs)
-
-    def zarr_store(self):
-        """The zarr store of the node at this path (``Store.zarr_store`` of its URL)."""
-        from .stores import store_for
-
-        return store_for(self.url).zarr_store()
 
     def _at(self, path, url):
         return StoredTree(self.fs, path, url, self.keys, self.dirs)

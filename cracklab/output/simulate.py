@@ -108,11 +108,17 @@ class Recorder:
         }
 
     def _store_op(self, doing, fn, *args, **kwargs):
-        """Run a write to the store; an OSError becomes one StoreError."""
+        """Run a write to the store; an OSError, or a store at a URL that cannot be reached
+        (``objectstore.unreachable``), becomes one StoreError."""
         try:
             return fn(*args, **kwargs)
-        except OSError as exc:
-            err = checkpoint.store_error(self.path or self.store, exc, doing)
+        except Exception as exc:
+            from .objectstore import unreachable
+
+            err = unreachable(self.path if self.path is not None else self.store, exc, doing)
+            if err is None and not isinstance(exc, OSError):
+                raise
+            err = err or checkpoint.store_error(self.path or self.store, exc, doing)
             if self.checkpoint_step is not None:
                 err.args = (f"{err.args[0]}; the store keeps the run up to its checkpoint after step "
                             f"{self.checkpoint_step}: fix the cause, then resume (cracklab run --resume)",)

@@ -39,7 +39,7 @@ import numpy as np
 
 from ..errors import StoreWarning
 from .checkpoint import is_final_array, scene_digest
-from .stores import is_url
+from .stores import is_url, zarr_of
 
 CHECKSUM_CODEC = "crc32c"
 SCENE_CHANGED = "the run's scene"      # how a scene that is not the run's own is named
@@ -169,8 +169,9 @@ def store_tree(store, members=None):
 
 def _zarr(p):
     """What zarr opens for the node at ``p`` (a local path, or a StoredTree: its URL
-    through its ``Store.zarr_store``, no listings cache)."""
-    return p.zarr_store() if hasattr(p, "zarr_store") else str(p)
+    through its ``Store.zarr_store``, no listings cache: ``stores.zarr_of``)."""
+    url = getattr(p, "url", None)
+    return zarr_of(url) if url is not None else str(p)
 
 
 # ---------------------------------------------------------------------------- metadata

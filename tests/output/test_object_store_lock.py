@@ -186,3 +186,7 @@ def test_two_sweep_processes_started_at_once_on_one_s3_store(s3_env, tmp_path):
     assert len(status) == 2 and all(s["complete"] for s in status), status
     keys = [o["Key"] for o in _client(s3_env).list_objects_v2(Bucket=bucket).get("Contents", [])]
     assert f"ens.zarr/{LOCK}" not in keys
+    winner = procs[[p.returncode for p in procs].index(0)].pid      # every member run by the winner alone
+    workers = {json.loads(_client(s3_env).get_object(Bucket=bucket, Key=k)["Body"].read())["attributes"]["worker"]
+               for k in keys if k.count("/") == 3 and k.startswith("ens.zarr/members/") and k.endswith("/zarr.json")}
+    assert workers == {f"{socket.gethostname()}:{winner}"}, workers

@@ -10,6 +10,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -236,3 +237,54 @@ def test_sigkill_of_cracklab_run_into_s3_then_resume(s3_env, tmp_path):
     assert proc.returncode == 0, err.decode()[-2000:]
     assert f"resumed from step {last}" in err.decode(), err.decode()
     assert_same(xr.open_zarr(ref_url, consolidated=False).load(), xr.open_zarr(url, consolidated=False).load())
+
+
+# ---------------------------------------------------------------------------- the store unreachable
+@pytest.mark.parametrize("client", ["retries", "one attempt"])
+def test_the_store_unreachable_during_a_checkpoint(client, s3_restartable, tmp_path, monkeypatch):
+    """The server unreachable for 3 s from the middle of the second checkpoint's write
+    (its bytes stored, its pointer not yet; tests/s3_server.py, ``outage``). With a client
+    that retries for long enough (AWS_RETRY_MODE=standard, AWS_MAX_ATTEMPTS=10) the run
+    goes on and is the uninterrupted run, bit for bit; with one attempt per request
+    (AWS_MAX_ATTEMPTS=1) `cracklab run` stops with one line naming the store, what it was
+    doing and the checkpoint kept, and the same command, with the store back, resumes from
+    the first checkpoint to the uninterrupted run, bit for bit."""
+    server = s3_restartable
+    bucket = server.make_bucket()
+    url = f"s3://{bucket}/run.zarr"
+    scene = _scene(t_end=1.0)
+    toml = tmp_path / "scene.toml"
+    toml.write_text(scene_to_toml(scene))
+    ref = cracklab.simulate(scene)
+    if client == "retries":
+        monkeypatch.setenv("AWS_RETRY_MODE", "standard")
+        monkeypatch.setenv("AWS_MAX_ATTEMPTS", "10")
+    else:
+        monkeypatch.setenv("AWS_MAX_ATTEMPTS", "1")
+    calls, outage = [], []
+
+    def unreachable_at_the_second_commit():
+        calls.append(1)
+        if len(calls) == 2:
+            outage.append(threading.Thread(target=server.outage, args=(3.0,)))
+            outage[0].start()
+            time.sleep(0.3)
+
+    monkeypatch.setattr(ck, "_sleep_hook", unreachable_at_the_second_commit)
+    res = _cli_run(toml, url, "--checkpoint-every", "10")
+    outage[0].join()
+    monkeypatch.setattr(ck, "_sleep_hook", lambda: None)
+    if client == "retries":
+        assert res.exit_code == 0, res.output
+    else:
+        lines = res.output.strip().splitlines()
+        assert res.exit_code == 1 and len(lines) == 1 and "Traceback" not in res.output, res.output
+        assert lines[0].startswith(f"Error: store {url}: cannot be reached while writing the checkpoint after step "
+                                   f"20 (EndpointConnectionError: "), lines
+        assert "the store keeps the run up to its checkpoint after step 10" in lines[0], lines
+        monkeypatch.delenv("AWS_MAX_ATTEMPTS")
+        res = _cli_run(toml, url, "--checkpoint-every", "10")
+        assert res.exit_code == 0 and "resumed from step 10" in res.output, res.output
+    assert_same(ref, xr.open_zarr(url, consolidated=False).load())
+    assert cracklab.output.verify.verify(url).ok
+    assert keys(server, bucket, "run.zarr/_checkpoint/") == []

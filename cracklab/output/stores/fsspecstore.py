@@ -19,7 +19,8 @@ object exists, so of two sweeps exactly one creates it), kept alive by a heartbe
 object rewritten every ``LOCK_HEARTBEAT_S`` with ``If-Match`` on its own ETag) and deleted
 at the end with ``If-Match`` (never another sweep's lock). A lock whose heartbeat is older
 than ``LOCK_STALE_S`` (by the server's LastModified against this machine's clock), or
-whose process is gone on this host, is stale: it is taken over by a write with
+whose process is gone on this host, or which a sweep of this process left (its release
+could not reach the store; ``_HELD`` has the tokens this process holds), is stale: it is taken over by a write with
 ``If-Match`` on the stale lock's ETag, so that of several sweeps taking it over one wins.
 Other fsspec schemes have no conditional write: the lock is written, then read back
 after ``LOCK_SETTLE_S``; a sweep whose token is not the one read back gives way. Two
@@ -254,6 +255,11 @@ class FsspecStore(Store):
         self._drop_states(keep=pointer["object"] if pointer else None)
 
 
+#: the tokens of the sweep locks this process holds or is taking (a lock of this process
+#: with another token was left by a sweep of it that ended, its release not written: stale)
+_HELD: set = set()
+
+
 class _ObjectLock:
     """The sweep lock of a store at a URL (module docstring); a context yielding the
     lock's URL."""
@@ -297,6 +303,9 @@ class _ObjectLock:
         if doc.get("host") == socket.gethostname() and isinstance(doc.get("pid"), int) and \
                 doc.get("pid") != os.getpid() and not pid_alive(doc["pid"]):
             return True                  # its process is gone (this host)
+        if doc.get("host") == socket.gethostname() and doc.get("pid") == os.getpid() and \
+                doc.get("token") not in _HELD:
+            return True                  # a sweep of this process that ended (its release could not reach the store)
         return age > LOCK_STALE_S       # no heartbeat for that long: gone, whatever host
 
     def _refuse(self, doc: dict, age: float):
@@ -390,12 +399,18 @@ class _ObjectLock:
             return
 
     def __enter__(self):
-        self._take()
+        _HELD.add(self.me["token"])      # before it may be written: held, for this process's other sweeps
+        try:
+            self._take()
+        except BaseException:
+            _HELD.discard(self.me["token"])
+            raise
         self._beat = threading.Thread(target=self._heartbeat, name="cracklab-sweep-lock", daemon=True)
         self._beat.start()
         return self.url
 
     def __exit__(self, *exc):
+        _HELD.discard(self.me["token"])
         self._stop.set()
         if self._beat is not None:
             self._beat.join(timeout=10)
