@@ -85,6 +85,24 @@ def _same(ens, ref):
         np.testing.assert_array_equal(ens[name].values, ref[name].values, err_msg=name)
 
 
+def _at_second_member(action):
+    """A Recorder.__call__ that calls ``action()`` once, at step 6 of the second member a
+    sweep runs; (the replacement, the members' ids in the order they started)."""
+    real = SIM.Recorder.__call__
+    seen, done = [], []
+
+    def call(self, state):
+        real(self, state)
+        mid = self.kept_attrs.get("member_id")
+        if mid not in seen:
+            seen.append(mid)
+        if len(seen) == 2 and state.n == 6 and not done:
+            done.append(True)
+            action()
+
+    return call, seen
+
+
 # ---------------------------------------------------------------------------- the lock taken over
 def test_members_of_a_sweep_whose_lock_was_taken_over_stop_writing(s3_env, monkeypatch, reference):
     """Another sweep takes the lock over while the second member runs (as when this
@@ -96,21 +114,16 @@ def test_members_of_a_sweep_whose_lock_was_taken_over_stop_writing(s3_env, monke
     url = f"s3://{bucket}/ens.zarr"
     monkeypatch.setattr(fsspecstore, "GUARD_EVERY_S", 0.5)          # a write reads the lock 0.5 s after the last
     client = _client(s3_env)
-    seen, after = [], {}
+    after = {}
     real = SIM.Recorder.__call__
 
-    def taken_over(self, state):
-        real(self, state)
-        mid = self.kept_attrs.get("member_id")
-        if mid not in seen:
-            seen.append(mid)
-        if len(seen) == 2 and state.n == 6 and not after:
-            other = {"host": "elsewhere.example", "pid": 4242, "started": "2026-01-01T00:00:00+0000",
-                     "token": "e" * 16}
-            client.put_object(Bucket=bucket, Key=f"ens.zarr/{LOCK}", Body=json.dumps(other).encode())
-            after.update(_objects(s3_env, bucket))
-            time.sleep(0.6)                                         # the next write reads the lock
+    def take_over():
+        other = {"host": "elsewhere.example", "pid": 4242, "started": "2026-01-01T00:00:00+0000", "token": "e" * 16}
+        client.put_object(Bucket=bucket, Key=f"ens.zarr/{LOCK}", Body=json.dumps(other).encode())
+        after.update(_objects(s3_env, bucket))
+        time.sleep(0.6)                                             # the next write reads the lock
 
+    taken_over, seen = _at_second_member(take_over)
     monkeypatch.setattr(SIM.Recorder, "__call__", taken_over)
     with pytest.raises(SweepLockLost) as info:
         E.run(BUILDER, SWEEP, url, scheduler="synchronous", progress=False)
@@ -257,20 +270,15 @@ def test_kill_9_of_the_sweep_driver_mid_member_then_the_rerun_completes_the_stor
 def _during_second_member(fault):
     """A Recorder.__call__ that starts ``fault()`` in a thread of its own at step 6 of the
     second member a sweep runs (once); (the replacement, the threads started)."""
-    real = SIM.Recorder.__call__
-    seen, started = [], []
+    started = []
 
-    def call(self, state):
-        real(self, state)
-        mid = self.kept_attrs.get("member_id")
-        if mid not in seen:
-            seen.append(mid)
-        if len(seen) == 2 and state.n == 6 and not started:
-            t = threading.Thread(target=fault)
-            t.start()
-            started.append(t)
-            time.sleep(0.3)             # the fault has begun: the member's next writes meet it
+    def begin():
+        t = threading.Thread(target=fault)
+        t.start()
+        started.append(t)
+        time.sleep(0.3)                 # the fault has begun: the member's next writes meet it
 
+    call, _ = _at_second_member(begin)
     return call, started
 
 

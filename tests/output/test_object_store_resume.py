@@ -166,13 +166,18 @@ def _cli_run(toml, url, *extra):
     return CliRunner().invoke(main, ["run", str(toml), "-o", url, "--no-progress", *extra])
 
 
-def test_cracklab_run_into_s3_is_interrupted_then_resumed(s3_env, tmp_path, monkeypatch):
-    bucket = s3_env.make_bucket()
+def _cli_case(server, tmp_path):
+    """(a new bucket, its run.zarr URL, the short scene's TOML in tmp_path, its uninterrupted run)."""
+    bucket = server.make_bucket()
     url = f"s3://{bucket}/run.zarr"
     scene = _scene(t_end=1.0)
     toml = tmp_path / "scene.toml"
     toml.write_text(scene_to_toml(scene))
-    ref = cracklab.simulate(scene)
+    return bucket, url, toml, cracklab.simulate(scene)
+
+
+def test_cracklab_run_into_s3_is_interrupted_then_resumed(s3_env, tmp_path, monkeypatch):
+    _, url, toml, ref = _cli_case(s3_env, tmp_path)
     real = SIM.Recorder.__call__
 
     def interrupted(self, state):
@@ -250,12 +255,7 @@ def test_the_store_unreachable_during_a_checkpoint(client, s3_restartable, tmp_p
     doing and the checkpoint kept, and the same command, with the store back, resumes from
     the first checkpoint to the uninterrupted run, bit for bit."""
     server = s3_restartable
-    bucket = server.make_bucket()
-    url = f"s3://{bucket}/run.zarr"
-    scene = _scene(t_end=1.0)
-    toml = tmp_path / "scene.toml"
-    toml.write_text(scene_to_toml(scene))
-    ref = cracklab.simulate(scene)
+    bucket, url, toml, ref = _cli_case(server, tmp_path)
     if client == "retries":
         monkeypatch.setenv("AWS_RETRY_MODE", "standard")
         monkeypatch.setenv("AWS_MAX_ATTEMPTS", "10")
