@@ -59,6 +59,10 @@ SLOW = frozenset({
     "tests/ensemble/test_object_store_faults.py::"
     "test_the_store_unreachable_longer_than_the_retries_ends_the_sweep_in_one_line",
     "tests/output/test_object_store_resume.py::test_the_store_unreachable_during_a_checkpoint",
+    "tests/ensemble/test_object_store_faults.py::"
+    "test_kill_9_of_a_dask_worker_mid_member_then_the_s3_store_is_complete",
+    "tests/ensemble/test_object_store_faults.py::"
+    "test_kill_9_of_the_driver_on_a_dask_scheduler_its_orphaned_members_stop_writing",
     # sweeps on the batch jobs of a one-node Slurm (tests/slurm.py) and on dask processes started
     # by hand, writing to the S3 server
     "tests/ensemble/test_cluster_slurm.py::test_a_sweep_on_slurm_jobs_writes_straight_to_s3_and_matches_a_local_run",

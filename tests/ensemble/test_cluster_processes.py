@@ -1,24 +1,17 @@
 """A sweep on dask processes started by hand (docs/guide/cluster.md, "workers you start
-yourself"): a `dask scheduler` and two `dask worker` processes, each in a directory of its
-own with its own TMPDIR (nothing shared with the sweep or each other), and
-`cracklab sweep --scheduler` into the S3 server on loopback. Every member is written by
-one of the workers; the store is complete."""
+yourself"): a `dask scheduler` and two `dask worker` processes (tests/dask_processes.py),
+each in a directory of its own with its own TMPDIR (nothing shared with the sweep or each
+other), and `cracklab sweep --scheduler` into the S3 server on loopback. Every member is
+written by one of the workers; the store is complete."""
 import os
 import subprocess
 import sys
-import time
 
 from distributed import Client
 
 from cracklab.ensemble import member_status, open_member
-from s3_server import free_port
+from dask_processes import scheduler_and_workers
 from small_ensemble import CLUSTER_STUDY as STUDY
-
-
-def _start(args, cwd):
-    cwd.mkdir()
-    return subprocess.Popen([sys.executable, "-m", *args], cwd=cwd, env={**os.environ, "TMPDIR": str(cwd)},
-                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
 def test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand(s3_env, tmp_path):
@@ -26,15 +19,8 @@ def test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand(s3_env, tmp_pat
     url = f"s3://{bucket}/ens.zarr"
     study = tmp_path / "study.toml"
     study.write_text(STUDY)
-    address = f"tcp://127.0.0.1:{free_port()}"
-    procs = [_start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", address.rsplit(":", 1)[1],
-                     "--dashboard-address", ":0"], tmp_path / "scheduler")]
-    try:
-        for i in (1, 2):
-            procs.append(_start(["distributed.cli.dask_worker", address, "--nthreads", "1", "--local-directory", ".",
-                                 "--name", f"w{i}"], tmp_path / f"worker{i}"))
+    with scheduler_and_workers(tmp_path, 2) as address:
         with Client(address, timeout=60) as client:
-            client.wait_for_workers(2, timeout=120)
             pids = set(client.run(os.getpid).values())
             dirs = set(client.run(os.getcwd).values())
         assert dirs == {str(tmp_path / "worker1"), str(tmp_path / "worker2")}, dirs
@@ -47,13 +33,3 @@ def test_a_sweep_on_a_dask_scheduler_and_workers_started_by_hand(s3_env, tmp_pat
         for s in status:
             pid = int(open_member(url, s["id"]).attrs["worker"].rsplit(":", 1)[1])
             assert pid in pids, (pid, pids)
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        deadline = time.monotonic() + 20
-        for p in reversed(procs):
-            try:
-                p.wait(timeout=max(0.1, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                p.kill()
-                p.wait()

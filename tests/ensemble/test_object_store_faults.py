@@ -13,7 +13,12 @@
 * the S3 server killed and restarted with its data in the middle of a sweep
   (``s3_restartable``): the client's retries carry the sweep over it;
 * the store unreachable for longer than the client retries: the members that needed it
-  fail, the sweep stops with one line, and the rerun completes the store.
+  fail, the sweep stops with one line, and the rerun completes the store;
+* on a `dask scheduler` and `dask worker` processes started by hand (tests/dask_processes.py):
+  kill -9 of the worker running a member (dask runs it again, or the sweep names it in one
+  line; the rerun completes the store), and kill -9 of the driver, whose members run on in
+  the living workers until their guard stops them (nothing more written; the rerun
+  completes the store).
 
 (A network error during a single run's checkpoint: tests/output/test_object_store_resume.py;
 two sweeps started at once on one store: tests/output/test_object_store_lock.py.)"""
@@ -37,7 +42,7 @@ from cracklab.ensemble.verify import verify
 from cracklab.errors import StoreError
 from cracklab.output.stores import SweepLockLost, fsspecstore
 from cracklab.output.stores.local import pid_alive
-from small_ensemble import BUILDER, SWEEP, member_ids
+from small_ensemble import BUILDER, STUDY, SWEEP, member_ids
 
 SIM = importlib.import_module("cracklab.output.simulate")
 REAL_CALL = SIM.Recorder.__call__
@@ -335,3 +340,160 @@ def test_the_store_unreachable_longer_than_the_retries_ends_the_sweep_in_one_lin
     assert again.ok and len(again.ran) == 2 and len(again.skipped) == 1, again.summary()
     assert verify(url).ok
     _same(E.open_ensemble(url).load(), reference)
+
+
+# ---------------------------------------------------------------------------- a scheduler and workers of their own
+def _study(tmp_path, t_end, ps):
+    """small_ensemble's study of cracks with ``t_end`` and the loads ``ps``: on the S3
+    server a member of t_end = 30 writes for about 4 s, one of t_end = 60 for 8 s (alone on
+    an idle machine)."""
+    study = tmp_path / "study.toml"
+    study.write_text(STUDY.replace("t_end = 0.05", f"t_end = {t_end}").replace("p = [1.0, 1.2]", f"p = {ps}"))
+    return study
+
+
+def _local(study, tmp_path):
+    """The store of the study swept uninterrupted on the local disk, synchronously."""
+    from click.testing import CliRunner
+
+    from cracklab.cli import main
+
+    local = tmp_path / "ref.zarr"
+    res = CliRunner().invoke(main, ["sweep", str(study), "-o", str(local), "--scheduler", "synchronous",
+                                    "--no-progress"])
+    assert res.exit_code == 0, res.output
+    return local
+
+
+def _on_scheduler(study, url, address, *more):
+    return [sys.executable, "-m", "cracklab.cli", "sweep", str(study), "-o", url, "--no-progress",
+            "--scheduler", address, *more]
+
+
+def _mid_run(url):
+    """{member id: pid of its worker} of the members of the store at ``url`` that are in the
+    middle of their run: a chunk of delta_2 on the server, not complete."""
+    import s3fs
+
+    fs = s3fs.S3FileSystem(skip_instance_cache=True, use_listings_cache=False)
+    try:
+        keys = fs.find(f"{url}/members/")
+    except FileNotFoundError:
+        return {}
+    out = {}
+    for mid in {k.split("/members/")[1].split("/")[0] for k in keys if "/delta_2/c/" in k}:
+        try:
+            attrs = json.loads(fs.cat_file(f"{url}/members/{mid}/zarr.json"))["attributes"]
+        except (FileNotFoundError, ValueError, KeyError):
+            continue
+        if attrs.get("complete") is False and "worker" in attrs:
+            out[mid] = int(attrs["worker"].rsplit(":", 1)[1])
+    return out
+
+
+def _wait_for(what, proc, timeout=120.0):
+    """``what()`` once it is true (polled), while ``proc`` runs."""
+    deadline = time.monotonic() + timeout
+    while not (got := what()):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+    return got
+
+
+def test_kill_9_of_a_dask_worker_mid_member_then_the_s3_store_is_complete(s3_env, tmp_path):
+    """`cracklab sweep --scheduler ADDRESS -o s3://...` on a scheduler and two `dask worker`
+    processes started by hand: the worker process that runs a member is killed (SIGKILL)
+    once that member has a chunk on the server. Dask runs the member again (on the other
+    worker, or on the one its nanny restarts): the sweep ends with every member complete,
+    the killed one written by another process, or names the member it gave up on in one
+    line. The same command then completes the store (skips what is complete), sound and,
+    bit for bit, an uninterrupted local sweep's."""
+    from distributed import Client
+
+    from dask_processes import scheduler_and_workers
+
+    study = _study(tmp_path, 30.0, [1.0, 1.2, 1.4])
+    local = _local(study, tmp_path)
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    with scheduler_and_workers(tmp_path / "dask", 2) as address:
+        with Client(address, timeout=60) as client:
+            pids = set(client.run(os.getpid).values())
+        driver = subprocess.Popen(_on_scheduler(study, url, address), cwd=tmp_path, env=_env(),
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            mid, pid = next(iter(_wait_for(lambda: _mid_run(url), driver).items()))
+            assert pid in pids, (pid, pids)
+            os.kill(pid, signal.SIGKILL)
+            out, err = driver.communicate(timeout=300)
+        finally:
+            if driver.poll() is None:
+                driver.kill()
+                driver.wait()
+        if driver.returncode == 0:          # run again by dask: written by another worker process
+            assert "3 members: 3 ran, 0 already complete, 0 failed" in out, (out, err)
+            assert int(E.open_member(url, mid).attrs["worker"].rsplit(":", 1)[1]) != pid
+            ran = 0
+        else:                               # given up: one line naming the member
+            assert driver.returncode == 1, err
+            assert [ln for ln in (out + err).splitlines() if mid in ln and "KilledWorker" in ln], (out, err)
+            ran = 1
+        rerun = subprocess.run(_on_scheduler(study, url, address), cwd=tmp_path, env=_env(), capture_output=True,
+                               text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert f"3 members: {ran} ran, {3 - ran} already complete, 0 failed" in rerun.stdout, rerun.stdout
+    assert verify(url).ok
+    assert LOCK not in "".join(_objects(s3_env, bucket))
+    _same(E.open_ensemble(url).load(), E.open_ensemble(local).load())
+
+
+def test_kill_9_of_the_driver_on_a_dask_scheduler_its_orphaned_members_stop_writing(s3_env, tmp_path):
+    """kill -9 of `cracklab sweep --scheduler ADDRESS -o s3://...` (its lock's heartbeat
+    every 0.5 s, an orphan's after 3 s: tests/quick_lock.py) while its members run on two
+    `dask worker` processes started by hand: the workers live on, and so do the members
+    they were running (a thread cannot be stopped; dask only drops their results). Each
+    stops at its next write once the lock has had no heartbeat for 3 s (its guard), long
+    before its own end: nothing more is written into the store, no member is marked
+    complete or failed. The same command, on the same workers, takes the lock over and
+    completes the store, sound and, bit for bit, an uninterrupted local sweep's."""
+    from distributed import Client
+
+    from dask_processes import members_running, scheduler_and_workers
+
+    study = _study(tmp_path, 60.0, [1.0, 1.2])
+    local = _local(study, tmp_path)
+    bucket = s3_env.make_bucket()
+    url = f"s3://{bucket}/ens.zarr"
+    with scheduler_and_workers(tmp_path / "dask", 2) as address, Client(address, timeout=60) as client:
+        pids = client.run(os.getpid)
+        driver = subprocess.Popen(_on_scheduler(study, url, address, "--import", "quick_lock"), cwd=tmp_path,
+                                  env=_env(), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            started = _wait_for(lambda: _mid_run(url), driver)
+            driver.kill()
+            assert driver.wait() == -signal.SIGKILL
+        finally:
+            if driver.poll() is None:
+                driver.kill()
+                driver.wait()
+        killed = time.monotonic()
+        assert sum(client.run(members_running).values()) >= 1          # orphaned, running on
+        while sum(client.run(members_running).values()):
+            assert time.monotonic() - killed < 60, "the orphaned members did not stop"
+            time.sleep(0.1)
+        stopped = time.monotonic() - killed
+        after = _objects(s3_env, bucket)
+        assert client.run(os.getpid) == pids                           # the same workers, alive
+        status = {s["id"]: s for s in E.member_status(url)}
+        assert not any(s["complete"] for s in status.values()), status
+        assert all(status[mid]["status"] == "running" for mid in started), status   # not even a failure written
+        time.sleep(1.0)
+        assert _objects(s3_env, bucket) == after, f"written to after its members stopped ({stopped:.1f} s)"
+        rerun = subprocess.run(_on_scheduler(study, url, address, "--import", "quick_lock"), cwd=tmp_path,
+                               env=_env(), capture_output=True, text=True, timeout=300)
+    assert rerun.returncode == 0, rerun.stderr
+    assert "2 members: 2 ran, 0 already complete, 0 failed" in rerun.stdout, rerun.stdout
+    assert verify(url).ok
+    assert LOCK not in "".join(_objects(s3_env, bucket))
+    _same(E.open_ensemble(url).load(), E.open_ensemble(local).load())
