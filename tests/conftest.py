@@ -24,6 +24,7 @@ DOC = Path(__file__).resolve().parent.parent / "docs" / "studies" / "verificatio
 #: fails when an entry names no test.
 SLOW = frozenset({
     "tests/sequence/test_sequence_memory.py::test_the_peak_memory_of_a_streamed_sequence_does_not_grow_with_its_length",
+    "tests/sequence/test_window.py::test_bp1_on_the_window_gives_the_run_on_the_whole_grid",
     # full scene runs (SCEC builders on coarse grids)
     "tests/scenes/test_tpv_rate_state.py::test_tpv101_nucleates_at_the_hypocentre_on_a_coarse_grid",
     "tests/scenes/test_tpv_rate_state.py::test_a_coarse_half_space_run_nucleates",

@@ -154,7 +154,7 @@ def _field(state, name):
     if name == "psi":
         return state.psi
     kind, c = name.split("_")
-    return {"delta": state.delta, "v": state.v, "tau": state.tau}[kind][int(c)]
+    return getattr(state, kind)[int(c)]       # tau only when asked: on a window it costs the grid's transforms
 
 
 class SequenceRecorder:
@@ -203,7 +203,11 @@ class SequenceRecorder:
             for name, value in (("t_station", state.t), ("max_slip_rate", vmax), ("x1", grid.x1[where[0]]),
                                 ("x3", grid.x3[where[1]]), ("time_step", state.dt)):
                 self.rows[name].append(float(value))
+            flat = [i * grid.shape[1] + j for i, j in self.nodes.values()]
             for f in self.station_fields:
+                if f.startswith("tau_"):
+                    self.series[f].append(list(state.tau_at(flat)[int(f.split("_")[1])]))
+                    continue
                 x = _field(state, f)
                 self.series[f].append([x[i, j] for i, j in self.nodes.values()])
         in_event = self.events.current is not None

@@ -42,16 +42,17 @@ def breakdown(dz, years=2.0, repeats=200) -> dict:
     y = y + 3.15e7 * f                       # a year on: the state of a slow phase
     system.rates(3.15e7, y)
     delta, psi = system.split(y)
-    shape = system.grid.shape
-    fields = {c: delta[c].reshape(shape) for c in system.comps}
     s = system.slides
-    T = np.abs(system.traction(3.15e7, y)[system.comps[0]][s])
+    h = slice(None) if system._half is None else system._half     # with the mirror: one of a node and its image
+    T = np.abs(system.traction(3.15e7, y)[system.comps[0]][s])[h]
     law = system.law
     rates = _best(lambda: system.rates(3.15e7, y), repeats)
-    transforms = _best(lambda: system.static.traction(fields), repeats)
-    solve = _best(lambda: law.slide_rates(T, psi[s], system.sigma_s, system.eta, guess=system.lnV, at=s), repeats)
+    transforms = _best(lambda: system.elastic(delta, 3.15e7), repeats)
+    solve = _best(lambda: law.slide_rates(T, psi[s][h], system.sigma_s[h], system.eta, guess=system.lnV,
+                                          at=system.at), repeats)
     step = _step(scene, system, y, repeats)
-    return {"dz": dz, "nodes": int(system.n), "sliding_points": int(s.sum()), "rates_s": rates,
+    return {"dz": dz, "nodes": int(scene.grid.n1 * scene.grid.n3), "points": int(system.n),
+            "sliding_points": int(s.sum()), "solved_points": int(system.solved), "rates_s": rates,
             "transforms_s": transforms, "solve_s": solve, "glue_s": rates - transforms - solve,
             "step_own_s": step, "step_s": 6 * rates + step}
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -47,6 +48,8 @@ def run_one(out, dz, years, tolerance, force=False, log=print, dynamic=False) ->
         if old.attrs.get("scene") == text:
             log(f"dz = {dz:g} m: reusing {store}")
             return json.loads(meta_path.read_text())
+    if force and store.exists():        # a rerun from the start, not a resume of the store
+        shutil.rmtree(store)
     log(f"dz = {dz:g} m: {scene.grid.n1} nodes, {years:g} years -> {store}", flush=True)
     t0 = time.time()
     ds = simulate(scene, store=str(store), resume=True)       # a killed run goes on from its checkpoint
@@ -318,6 +321,7 @@ def _fd_section(res):
                   + f" years apart; mean recurrence {np.mean(a['recurrence_yr']):.2f} and "
                   f"{np.mean(b['recurrence_yr']):.2f} years; largest slip rate {max(a['events']['peak_slip_rate']):.1f}"
                   f" and {max(b['events']['peak_slip_rate']):.1f} m/s.", ""]
+        lines += _fd_convergence(fd, keys, res.get("fd_checks"))
     qd = res.get("qd_at_fd", {})
     both = [dz for dz in fd if dz in qd]
     if both:
@@ -334,6 +338,47 @@ def _fd_section(res):
     return lines
 
 
+def _fd_convergence(fd, keys, checks) -> list:
+    """The page's lines on where BP1-FD's grids differ: the order from the three finest grids,
+    the finest one's error by Richardson's extrapolation, and the runs at a shorter step or a
+    tighter tolerance (``checks``, studies/cycles/fd_checks.py)."""
+    lines = []
+    if len(keys) >= 3:
+        c, a, b = (fd[k]["earthquakes_yr"] for k in keys[-3:])
+        n = min(len(c), len(a), len(b))
+        d1, d2 = c[n - 1] - a[n - 1], a[n - 1] - b[n - 1]
+        if d1 * d2 > 0 and abs(d1) > abs(d2):
+            ratio = d1 / d2
+            err = abs(d2) / (ratio - 1)
+            lines += [f"The target, event times within 1 year between {keys[-2]} and {keys[-1]} m over 1500 years, "
+                      f"is met for the first {sum(abs(x - y) <= 1 for x, y in zip(a[:n], b[:n]))} earthquakes "
+                      f"(to {max((y for x, y in zip(a[:n], b[:n]) if abs(x - y) <= 1), default=0.0):.0f} years), not "
+                      f"for the last {sum(abs(x - y) > 1 for x, y in zip(a[:n], b[:n]))}. The difference is the "
+                      f"grid's: the {n}th earthquake moves by {d1:+.2f} years from {keys[-3]} to {keys[-2]} m and by "
+                      f"{d2:+.2f} years from {keys[-2]} to {keys[-1]} m, {ratio:.1f} times less (order "
+                      f"{np.log2(ratio):.1f} in dz), so that by Richardson's extrapolation the {keys[-1]} m run's "
+                      f"event times are within about {err:.2f} years of the converged ones at that order, and "
+                      f"{float(keys[-1]) / 2:g} m would differ from {keys[-1]} m by about {err * (1 - 1 / ratio):.2f} "
+                      f"years (the target at the next halving; not run here: about 2.5 times the {keys[-1]} m run's "
+                      "time).", ""]
+    if checks:
+        base = fd.get(f"{next(iter(checks.values()))['dz']:g}")
+        if base:
+            ref = base["earthquakes_yr"]
+            parts = []
+            for name, r in checks.items():
+                t = [x / YEAR for x in r["t_start_s"]]
+                m = min(len(t), len(ref))
+                parts.append(f"with {name} ({r['accepted_steps']} steps to {r['years']:g} years) by "
+                             + ", ".join(f"{x - y:+.3f}" for x, y in zip(t[:m], ref[:m])) + " years")
+            r0 = next(iter(checks.values()))
+            lines += [f"Not the time step: at dz = {r0['dz']:g} m to {r0['years']:g} years, against the run above "
+                      "(beta 0.5, tolerance 1e-5), the first earthquakes move " + "; ".join(parts)
+                      + " (`python -m studies.cycles.fd_checks`), a small fraction of the difference between the "
+                      "grids at those earthquakes.", ""]
+    return lines
+
+
 def _cost_section(res, dzs):
     """The page's lines on the cost target (issue 35: 1500 years at 25 m in under a minute),
     from the finest run and ``res["cost"]`` (studies/cycles/cost.py at that dz), if measured."""
@@ -345,23 +390,30 @@ def _cost_section(res, dzs):
     ms = {k: 1e3 * cost[k] for k in ("rates_s", "transforms_s", "solve_s", "glue_s", "step_own_s", "step_s")}
     floor = 6 * (cost["transforms_s"] + cost["solve_s"]) * steps
     fe = cost["first_event"]
+    met = r["wall_s"] <= 60
+    window = (f"The quasi-dynamic system integrates the window of the points that do not creep (docs/reference/"
+              f"equations.md, \"Sequences: the quasi-dynamic response on a window\"): {cost['points']} of the "
+              f"{cost['nodes']} nodes at dz = {cost['dz']:g} m, the law solved at {cost['solved_points']} of them (a "
+              "node and its mirror image have the same traction and state). " if "points" in cost else "")
     return ["### Against the target", "",
-            f"The target, 1500 years at 25 m in under a minute on one core, is not met. At dz = {cost['dz']:g} m "
-            f"({cost['nodes']} nodes, {cost['sliding_points']} sliding) a rate evaluation costs {ms['rates_s']:.2f} ms: "
-            f"the transforms of the static response {ms['transforms_s']:.2f} ms, the rate-and-state solve "
-            f"{ms['solve_s']:.2f} ms, the rest {ms['glue_s']:.2f} ms; an accepted step of Dormand-Prince 5(4) takes "
-            f"six and {ms['step_own_s']:.2f} ms of its own (stage sums, error estimate and norm): {ms['step_s']:.1f} "
+            f"The target, 1500 years at 25 m in under a minute on one core: {r['wall_s']:.0f} s here, "
+            f"{'met' if met else 'not met'}. " + window
+            + f"A rate evaluation costs {ms['rates_s']:.3f} ms: "
+            f"the transforms of the static response {ms['transforms_s']:.3f} ms, the rate-and-state solve "
+            f"{ms['solve_s']:.3f} ms, the rest {ms['glue_s']:.3f} ms; an accepted step of Dormand-Prince 5(4) takes "
+            f"six and {ms['step_own_s']:.3f} ms of its own (stage sums, error estimate and norm): {ms['step_s']:.2f} "
             f"ms (`python -m studies.cycles.cost --dz {cost['dz']:g}`, best of 200 on the shared host). The run took "
             f"{steps} accepted steps, {r['steps_in_events']} of them in events: with nothing but the transforms and "
-            f"the solves it would take {floor / 60:.0f} min. A minute needs about {floor / 60:.0f} times fewer "
-            "steps or evaluations. The steps in events are set by the pair's accuracy, not by its stability (the "
+            f"the solves it would take {floor:.0f} s"
+            + ("" if met else f", so a minute needs about {floor / 60:.1f} times fewer steps or evaluations as well as "
+               "a step with no other cost")
+            + ". The steps in events are set by the pair's accuracy, not by its stability (the "
             f"first event at {fe['dz']:g} m, creeping region to {fe['depth'] / 1e3:g} km, takes "
             + ", ".join(f"{n} steps at tolerance {tol}" for tol, n in fe["steps_in_events"].items())
-            + ": about 10^(1/5) more per decade, the order of the pair), so a looser tolerance buys little; what "
-            "would meet the target is a step that "
-            "treats the stiff part implicitly (the radiation damping and the static response are diagonal in the "
-            "Fourier domain) with an order and error control of its own, or fewer nodes: the creeping region to "
-            "320 km holds 7 of every 8 (\"The periodic images\" below).", ""]
+            + ": about 10^(1/5) more per decade, the order of the pair), so a looser tolerance buys little and an "
+            "implicit step nothing; what would meet the target is a pair of higher order (its steps grow as the "
+            "tolerance to the power 1/order) and the rest of the evaluation compiled with the solve "
+            "(a few numpy calls on arrays of a few thousand points cost about as much as the arithmetic).", ""]
 
 
 def write_page(res, dzs, page, figs, command):
@@ -508,6 +560,8 @@ def main(argv=None) -> int:
         res["uguca"] = json.loads((out / "uguca_bp1.json").read_text())
     elif Path(args.page).exists():      # uguca's runs are not in OUT: their section as the page has it
         res["uguca_kept"] = kept_section(Path(args.page).read_text(), "## Against uguca")
+    if (out / "fd_checks.json").exists():       # python -m studies.cycles.fd_checks
+        res["fd_checks"] = json.loads((out / "fd_checks.json").read_text())
     cost = out / f"cost_dz{args.dz[-1]:g}.json"
     if cost.exists():
         res["cost"] = json.loads(cost.read_text())

@@ -97,11 +97,13 @@ class FullyDynamic(QuasiDynamic):
         self.response.start(self.rate_fields(f))
         self.started = True
 
-    def elastic(self, delta):
+    def elastic(self, delta, t=0.0):
         """The static response until the history starts, then Eq. (33) at the step's end."""
         if not self.started:
-            return super().elastic(delta)
-        return self.response.traction(delta, self.v_end)
+            return super().elastic(delta, t)
+        shape = self.grid.shape
+        F = self.response.traction({c: delta[c].reshape(shape) for c in self.comps}, self.v_end)
+        return {c: x.ravel() for c, x in F.items()}
 
     def stage(self, dt, rates) -> None:
         """Before a stage ``dt`` into a step of a pair: the history prepared for a step of dt,
@@ -119,7 +121,7 @@ class FullyDynamic(QuasiDynamic):
         _, psi_new = self.split(y_new)
         s = self.slides
         speed = 0.5 * (self._speed(f_a) + self._speed(f_b))
-        psi_new[s] = self.law.evolve_state(psi[s], speed, h, at=s)
+        psi_new[s] = self.law.evolve_state(psi[s], speed, h, at=self.at_slides)
         return y_new
 
     def _speed(self, dy):

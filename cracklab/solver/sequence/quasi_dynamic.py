@@ -16,6 +16,7 @@ import numpy as np
 from ...errors import InputError
 from .mirror import mirror_index
 from .static import StaticResponse
+from .window import WindowedStatic
 
 
 class QuasiDynamic:
@@ -27,32 +28,73 @@ class QuasiDynamic:
     ``Sequence.check_scene``; ``system_of`` in run.py builds the system of a scene)."""
 
     def __init__(self, material, grid, law, tau0, sigma, plate, creep=None, stiffness=0.0, transforms=None,
-                 mirror=False):
+                 mirror=False, window=False):
         comps = tuple(sorted(plate))
         shape = grid.shape
         self.grid, self.law, self.comps = grid, law, comps
-        self.n = int(np.prod(shape))
         self.plate = {c: float(v) for c, v in plate.items()}
         bonded = np.zeros(shape, bool) if law.bonded is None else np.broadcast_to(np.asarray(law.bonded, bool), shape)
         creep = np.zeros(shape, bool) if creep is None else np.broadcast_to(np.asarray(creep, bool), shape)
-        self.creep = creep.ravel()
-        self.slides = (~bonded & ~creep).ravel()
         self.stiffness = float(stiffness)
         self.static = StaticResponse(material, grid, comps, stiffness=self.stiffness, transforms=transforms)
         self.eta = material.eta(comps[0])
-        self.tau0 = {c: np.broadcast_to(np.asarray(tau0.get(c, 0.0), dtype=float), shape).ravel() for c in comps}
-        self.sigma = np.broadcast_to(np.asarray(sigma, dtype=float), shape).ravel()
-        if np.any(self.sigma[self.slides] <= 0) or not np.all(np.isfinite(self.sigma)):
+        tau0 = {c: np.broadcast_to(np.asarray(tau0.get(c, 0.0), dtype=float), shape).ravel() for c in comps}
+        sigma = np.broadcast_to(np.asarray(sigma, dtype=float), shape).ravel()
+        slides = (~bonded & ~creep).ravel()
+        if np.any(sigma[slides] <= 0) or not np.all(np.isfinite(sigma)):
             raise InputError("law.sigma_n", "must be finite and > 0 (compressive) where the plane slides")
+        # the unknowns' nodes (``points``): the whole grid, or (``window``) the window of the
+        # nodes that do not creep, when its transforms are smaller than the grid's (window.py)
+        self.window = None
+        if window and np.any(creep) and not grid.free_surface:
+            win = WindowedStatic(self.static, grid, ~creep)
+            self.window = win if win.worth else None
+        self.points = np.arange(int(np.prod(shape))) if self.window is None else self.window.points
+        pts = self.points
+        self.n = pts.size
+        self.creep = np.ascontiguousarray(creep.ravel()[pts])
+        self.slides = np.ascontiguousarray(slides[pts])
+        # the law's parameters are fields over the grid: its points are given as a mask of it
+        at = np.zeros(slides.size, bool)
+        at[pts[self.slides]] = True
+        self.at = self.at_slides = slides if self.window is None else at
+        self.tau0 = {c: np.ascontiguousarray(x[pts]) for c, x in tau0.items()}
+        self._tau0_grid = tau0 if self.window is not None else None     # for the fields over the grid
+        self.sigma = np.ascontiguousarray(sigma[pts])
         self.sigma_s = np.ascontiguousarray(self.sigma[self.slides])
         self.plate_speed = float(np.sqrt(sum(v * v for v in self.plate.values())))
         # the error scales (``scales``): L and a at every point, and the points integrated
-        self._L, self._a = (np.broadcast_to(np.asarray(getattr(law, name), dtype=float), shape).ravel()
+        self._L, self._a = (np.broadcast_to(np.asarray(getattr(law, name), dtype=float), shape).ravel()[pts]
                             for name in ("L", "a"))
         self._keep = np.concatenate([self.slides] * (len(comps) + 1))
+        # the state at t = 0 (``initial``), from the load over the grid
+        T = np.sqrt(sum(x ** 2 for x in tau0.values()))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            psi = law.initial_state(T.reshape(shape), sigma.reshape(shape), self.eta).ravel().astype(float)
+        self._psi0 = np.where(slides, psi, 0.0)[pts]     # a Scene's load slides at V_ini where it slides
         # Sequence.mirror: each node's image about x1 = 0, whose traction is made the same
-        self.image = mirror_index(shape) if mirror else None
-        self.lnV = None     # the last solve's ln V: Newton's guesses for the next
+        self.image = None
+        if mirror:
+            self._image_grid = mirror_index(shape)
+            image = self._image_grid[pts]
+            self.image = np.searchsorted(pts, image)
+            if not np.array_equal(pts[np.minimum(self.image, pts.size - 1)], image):   # pragma: no cover
+                raise InputError("sequence.creep", "must be even about x1 = 0 with sequence.mirror")
+        # with the mirror the solve runs at one of each sliding node and its image (``_half``:
+        # their places among the sliding nodes; ``_both``: the place in _half of each one's)
+        self._half = self._both = None
+        slid = np.flatnonzero(self.slides)
+        if self.image is not None and slid.size:
+            mate = np.searchsorted(slid, self.image[slid])
+            if np.array_equal(slid[np.minimum(mate, slid.size - 1)], self.image[slid]):
+                k = np.arange(slid.size)
+                self._half = np.flatnonzero(k <= mate)
+                self._both = np.searchsorted(self._half, np.minimum(k, mate))
+                self.at = np.zeros(slides.size, bool)
+                self.at[pts[slid[self._half]]] = True
+                self._sigma_half = np.ascontiguousarray(self.sigma_s[self._half])
+        self.solved = int(np.count_nonzero(self.slides)) if self._half is None else self._half.size
+        self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
     # -- the unknowns
@@ -63,25 +105,80 @@ class QuasiDynamic:
 
     def initial(self):
         """y at t = 0: no slip, and the law's initial state under the load at t = 0."""
-        T = np.sqrt(sum(self.tau0[c] ** 2 for c in self.comps))
-        shape = self.grid.shape
-        psi = self.law.initial_state(T.reshape(shape), self.sigma.reshape(shape), self.eta).ravel().astype(float)
-        psi[~self.slides] = 0.0     # a Scene's load slides at V_ini where it slides (RateState.check_scene)
-        return np.concatenate([np.zeros(self.n * len(self.comps)), psi])
+        return np.concatenate([np.zeros(self.n * len(self.comps)), self._psi0])
+
+    def on_points(self, x):
+        """``x`` at the unknowns' points: the unknowns or their rates (one block per component
+        and psi), or a field, as this system holds them or over the whole grid (a checkpoint
+        written by a run that held the whole grid)."""
+        x = np.asarray(x, dtype=float)
+        N, blocks = int(np.prod(self.grid.shape)), len(self.comps) + 1
+        if x.size in (self.n, blocks * self.n) or self.window is None:
+            return x
+        return x[self.points] if x.size == N else x.reshape(blocks, N)[:, self.points].ravel()
 
     def traction(self, t, y):
         """{component: tau*} at (t, y): load, elastic response and the spring's load."""
         delta, _ = self.split(y)
-        shape = self.grid.shape
-        F = self.elastic({c: delta[c].reshape(shape) for c in self.comps})
-        tau = {c: self.tau0[c] + F[c].ravel() + self.stiffness * self.plate[c] * t for c in self.comps}
+        F = self.elastic(delta, t)
+        tau = {c: self.tau0[c] + F[c] + self.stiffness * self.plate[c] * t for c in self.comps}
         if self.image is not None:      # exactly even: the same solve at a node and its image
             tau = {c: 0.5 * (x + x[self.image]) for c, x in tau.items()}
         return tau
 
-    def elastic(self, delta: dict) -> dict:
-        """{component: F} of the slip fields ``delta``: the static response."""
-        return self.static.traction(delta)
+    def elastic(self, delta: dict, t=0.0) -> dict:
+        """{component: F} of the slips ``delta`` at the unknowns' points (flat) at time ``t``:
+        the static response (on the window: of the slip less V_p t, less k V_p t, window.py)."""
+        if self.window is not None:
+            F = self.window.traction({c: delta[c] - self.plate[c] * t for c in self.comps})
+            if self.stiffness:
+                F = {c: x - self.stiffness * self.plate[c] * t for c, x in F.items()}
+            return F
+        shape = self.grid.shape
+        F = self.static.traction({c: delta[c].reshape(shape) for c in self.comps})
+        return {c: x.ravel() for c, x in F.items()}
+
+    def fields(self, t, y, last):
+        """(delta, v, tau_of, psi, V) over the grid at (t, y), ``last`` the evaluation there:
+        {component: field} for delta and v, fields for psi and V, and ``tau_of(nodes=None)``
+        giving {component: tau} over the grid, or at the flat indices ``nodes`` of the grid
+        (computed when asked: on a window the creeping region's needs the grid's transforms)."""
+        V, tau, v = last
+        delta, psi = self.split(y)
+        shape = self.grid.shape
+        if self.window is None:
+            grid = [{c: x[c].reshape(shape) for c in self.comps} for x in (delta, v, tau)]
+
+            def tau_all(nodes=None):
+                return grid[2] if nodes is None else {c: tau[c][nodes] for c in self.comps}
+            return grid[0], grid[1], tau_all, psi.reshape(shape), V.reshape(shape)
+        pts, N = self.points, int(np.prod(shape))
+
+        def spread(values, outside):
+            out = np.full(N, outside)
+            out[pts] = values
+            return out.reshape(shape)
+
+        d = {c: spread(delta[c], self.plate[c] * t) for c in self.comps}
+        vg = {c: spread(v[c], self.plate[c]) for c in self.comps}
+
+        def tau_window(nodes=None):
+            if nodes is not None:
+                at = np.searchsorted(pts, nodes)
+                if np.array_equal(pts[np.minimum(at, pts.size - 1)], nodes):    # the nodes are on the window
+                    return {c: tau[c][at] for c in self.comps}
+                return {c: x.ravel()[nodes] for c, x in tau_window().items()}
+            F = self.static.traction(d)
+            out = {}
+            for c in self.comps:
+                x = (self._tau0_grid[c].reshape(shape) + F[c] + self.stiffness * self.plate[c] * t).ravel()
+                if self.image is not None:
+                    x = 0.5 * (x + x[self._image_grid])
+                x -= self.eta * vg[c].ravel()
+                x[pts] = tau[c]
+                out[c] = x.reshape(shape)
+            return out
+        return d, vg, tau_window, spread(psi, 0.0), spread(V, self.plate_speed)
 
     def stage(self, dt, rates) -> None:
         """Before a stage ``dt`` into a step, the previous stage's rates ``rates``: nothing for
@@ -98,7 +195,13 @@ class QuasiDynamic:
         else:
             ts = {c: tau[c][s] for c in self.comps}
             T = np.sqrt(sum(x * x for x in ts.values()))
-        Vs, self.lnV, dps = self.law.slide_rates(T, psi[s], self.sigma_s, self.eta, guess=self.lnV, at=s)
+        if self._half is None:
+            Vs, self.lnV, dps = self.law.slide_rates(T, psi[s], self.sigma_s, self.eta, guess=self.lnV, at=self.at)
+        else:       # a node and its image: the same traction, the same state
+            h = self._half
+            Vh, self.lnV, dph = self.law.slide_rates(T[h], psi[s][h], self._sigma_half, self.eta, guess=self.lnV,
+                                                     at=self.at)
+            Vs, dps = Vh[self._both], dph[self._both]
         dy = np.zeros_like(y)
         dd, dpsi = self.split(dy)
         V = np.zeros(self.n)

@@ -3,7 +3,9 @@ fully dynamic response), its step control, stepped by :func:`integrate.integrate
 scene's pair or by :func:`predictor_corrector.integrate_dynamic`, resumable from its state."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Callable
 
 import numpy as np
 
@@ -19,16 +21,26 @@ from .quasi_dynamic import QuasiDynamic
 class SequenceState:
     """After accepted step ``n`` (time ``t``, reached by a step ``dt``): the fields over the
     grid, {component: array} for ``delta``, ``v``, ``tau``; ``psi`` and the slip rate
-    magnitude ``V``."""
+    magnitude ``V``. ``tau`` is computed when first asked (``tau_of``)."""
 
     n: int
     t: float
     dt: float
     delta: dict
     v: dict
-    tau: dict
+    tau_of: Callable = field(repr=False)
     psi: np.ndarray
     V: np.ndarray
+
+    @cached_property
+    def tau(self) -> dict:
+        return self.tau_of()
+
+    def tau_at(self, nodes) -> dict:
+        """{component: tau at the flat indices ``nodes`` of the grid}."""
+        if "tau" in self.__dict__:
+            return {c: x.ravel()[nodes] for c, x in self.tau.items()}
+        return self.tau_of(np.asarray(nodes, dtype=np.int64))
 
 
 def system_of(scene, transforms=None) -> QuasiDynamic:
@@ -47,7 +59,8 @@ def system_of(scene, transforms=None) -> QuasiDynamic:
         dt_min = steps_of(scene)[0]
         return FullyDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, h_floor=dt_min,
                             mirror=seq.mirror)
-    return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, mirror=seq.mirror)
+    return QuasiDynamic(*args, creep=seq.creep, stiffness=seq.stiffness, transforms=transforms, mirror=seq.mirror,
+                        window=True)
 
 
 def components_of(scene) -> list:
@@ -88,28 +101,24 @@ class SequenceRun:
 
     def set_state(self, state: dict) -> None:
         self.n, self.t, self.dt_next = int(state["n"]), float(state["t"]), float(state["dt_next"])
-        self.y = np.array(state["y"], dtype=float)
-        self.system.lnV = None if state["lnV"] is None else np.array(state["lnV"], dtype=float)
-        self.rates = None if state["rates"] is None else np.array(state["rates"], dtype=float)
+        own = self.system.on_points
+        self.y = own(np.array(state["y"], dtype=float))
+        lnV = None if state["lnV"] is None else np.array(state["lnV"], dtype=float)
+        self.system.lnV = lnV if lnV is None or lnV.size == self.system.solved else None   # another layout's: no guess
+        self.rates = None if state["rates"] is None else own(np.array(state["rates"], dtype=float))
         if self.dynamic:
             self.system.set_state(state["system"])
         last = state.get("last")
-        self.system.last = None if last is None else (np.array(last[0]), {int(c): np.array(a) for c, a in
-                                                                          last[1].items()},
-                                                      {int(c): np.array(a) for c, a in last[2].items()})
+        self.system.last = None if last is None else (own(last[0]), {int(c): own(a) for c, a in last[1].items()},
+                                                      {int(c): own(a) for c, a in last[2].items()})
 
     def state(self, dt=0.0) -> SequenceState:
         """The fields at the current point (the system's last evaluation is at it)."""
         sysm = self.system
         if sysm.last is None:
             sysm.rates(self.t, self.y)
-        V, tau, v = sysm.last
-        delta, psi = sysm.split(self.y)
-        shape = self.scene.grid.shape
-        grid = {name: {c: x[c].reshape(shape) for c in sysm.comps} for name, x in
-                (("delta", delta), ("v", v), ("tau", tau))}
-        return SequenceState(self.n, self.t, dt, grid["delta"], grid["v"], grid["tau"], psi.reshape(shape),
-                             V.reshape(shape))
+        delta, v, tau_of, psi, V = sysm.fields(self.t, self.y, sysm.last)
+        return SequenceState(self.n, self.t, dt, delta, v, tau_of, psi, V)
 
     def __iter__(self):
         if self.n == 0:

@@ -1,0 +1,105 @@
+"""The static response on a window of the plane (docs/reference/equations.md, "Sequences:
+the quasi-dynamic response on a window"): where a sequence's plane creeps at the plate
+rate, its slip is V_p t exactly, and a uniform slip loads the plane only through the
+spring on the mean slip, so
+
+    F[delta] = F[delta - V_p t] - k V_p t,
+
+and delta - V_p t vanishes outside the smallest periodic box holding every point that does
+not creep (the window). On the window F[delta - V_p t] is the periodic grid's static
+response (static.py) convolved with a field that is zero outside the window: the
+response to a unit slip at one node, sampled at the window's offsets and convolved by
+FFTs of at least 2 m - 1 nodes along each axis the window is shorter than half of (m its
+nodes there), the whole axis otherwise. The same numbers as the whole grid's transforms,
+to round-off, at the cost of the window's."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.fft as sfft
+
+
+def periodic_box(mask_1d) -> tuple[int, int]:
+    """(start, length) of the shortest run of consecutive indices, with wrap-around, holding
+    every True of ``mask_1d`` (the whole axis, (0, n), when all are True or none)."""
+    n = mask_1d.size
+    on = np.flatnonzero(mask_1d)
+    if on.size == 0 or on.size == n:
+        return 0, n
+    gaps = np.diff(np.concatenate([on, [on[0] + n]]))     # gap after each True, the last wrapping
+    k = int(np.argmax(gaps))
+    start = int(on[(k + 1) % on.size])
+    return start, n - int(gaps[k]) + 1
+
+
+class WindowedStatic:
+    """The static response of ``static`` (a StaticResponse on ``grid``, periodic) on the window
+    of the nodes of ``mask`` (a boolean field: the nodes whose slip may differ from the plate's).
+
+    ``points``: the window's nodes as flat indices of the grid, increasing; ``traction``
+    takes {component: slip less V_p t at ``points``} and gives {component: its static
+    traction at ``points``}. ``worth``: whether the window's transforms are smaller than
+    the grid's."""
+
+    def __init__(self, static, grid, mask):
+        mask = np.broadcast_to(np.asarray(mask, bool), grid.shape)
+        shape = grid.shape
+        self.comps = static.components
+        axes = []
+        for ax, n in enumerate(shape):
+            start, m = periodic_box(np.any(mask, axis=1 - ax))
+            M = sfft.next_fast_len(2 * m - 1, real=True)
+            if M >= n:
+                start, m, M = 0, n, n
+            axes.append((start, m, M, n))
+        self.axes = axes
+        self.size = tuple(M for _, _, M, _ in axes)
+        self.box = tuple(m for _, m, _, _ in axes)
+        self.worth = int(np.prod(self.size)) < int(np.prod(shape))
+        idx = [(start + np.arange(m)) % n for start, m, _, n in axes]
+        box_flat = (idx[0][:, None] * shape[1] + idx[1][None, :]).ravel()
+        self.points = np.sort(box_flat)
+        # box cell -> position in points, and back
+        self.to_box = np.searchsorted(self.points, box_flat)
+        self.from_box = np.argsort(self.to_box)
+        # the kernels: the response to a unit slip of each component at node (0, 0), sampled at
+        # the window's offsets (each axis: -(m - 1) .. m - 1, or the whole periodic axis)
+        src, dst = [], []
+        for start, m, M, n in axes:
+            d = np.arange(n) if m == n else np.arange(-(m - 1), m)
+            src.append(d % n)
+            dst.append(d % M)
+        # transform only the axes longer than a node (the plane problem's x3 is one)
+        self.fft_axes = tuple(ax for ax in range(2) if self.size[ax] > 1) or (0,)
+        self.kernels = {}
+        for b in self.comps:
+            unit = {c: np.zeros(shape) for c in self.comps}
+            unit[b][0, 0] = 1.0
+            F = static.traction(unit)
+            for a in self.comps:
+                K = np.zeros(self.size)
+                K[np.ix_(dst[0], dst[1])] = F[a][np.ix_(src[0], src[1])]
+                self.kernels[a, b] = self._forward(K)
+
+    def traction(self, slip: dict) -> dict:
+        """{component: static traction at ``points``} of {component: slip at ``points``} that
+        is zero outside the window."""
+        spectra = {b: self._forward(np.asarray(slip[b], dtype=float)[self.to_box].reshape(self.box))
+                   for b in self.comps}
+        out = {}
+        for a in self.comps:
+            acc = sum(self.kernels[a, b] * spectra[b] for b in self.comps)
+            field = self._inverse(acc)[:self.box[0], :self.box[1]]
+            out[a] = np.ascontiguousarray(field).ravel()[self.from_box]
+        return out
+
+    def _forward(self, box):
+        if len(self.fft_axes) == 1:       # the 1D transform costs less to call
+            ax = self.fft_axes[0]
+            return sfft.rfft(box, n=self.size[ax], axis=ax)
+        return sfft.rfftn(box, s=self.size, axes=self.fft_axes)
+
+    def _inverse(self, spectrum):
+        if len(self.fft_axes) == 1:
+            ax = self.fft_axes[0]
+            return sfft.irfft(spectrum, n=self.size[ax], axis=ax)
+        return sfft.irfftn(spectrum, s=self.size, axes=self.fft_axes)

@@ -1,0 +1,136 @@
+"""The quasi-dynamic response on a window (solver/sequence/window.py): where the plane
+creeps at the plate rate, the traction on the window of the other points from the
+window's transforms is the whole grid's static traction (static.py) to round-off; a BP1
+run on the window gives the events of the run on the whole grid."""
+import numpy as np
+import pytest
+
+MU, NU = 30e9, 0.25
+
+
+def material():
+    from cracklab import Material
+
+    return Material(mu=MU, cs=3000.0, nu=NU)
+
+
+@pytest.mark.parametrize("mask_of", ["wraps", "inside", "one"])
+def test_periodic_box_is_the_shortest_run_holding_the_mask(mask_of):
+    from cracklab.solver.sequence.window import periodic_box
+
+    n = 40
+    on = {"wraps": [0, 1, 2, 37, 38, 39, 5], "inside": [10, 14, 20], "one": [7]}[mask_of]
+    mask = np.zeros(n, bool)
+    mask[on] = True
+    start, m = periodic_box(mask)
+    held = (start + np.arange(m)) % n
+    assert set(on) <= set(held.tolist())
+    best = min(len(range(s, s + L)) for s in range(n) for L in range(1, n + 1)
+               if set(on) <= {(s + j) % n for j in range(L)})
+    assert m == best
+
+
+@pytest.mark.parametrize("case", ["plane", "3d_shear", "3d_stiff"])
+def test_window_traction_is_the_grid_traction(case):
+    from cracklab import Grid
+    from cracklab.solver.sequence.static import StaticResponse
+    from cracklab.solver.sequence.window import WindowedStatic
+
+    rng = np.random.default_rng(3)
+    if case == "plane":
+        g, comps, k = Grid(n1=480, n3=1, L1=4800.0, L3=1.0), (3,), 0.0
+        mask = np.zeros(g.shape, bool)
+        mask[:50] = mask[-49:] = True                     # a fault and its image about x1 = 0
+    else:
+        g, comps, k = Grid(n1=96, n3=80, L1=960.0, L3=800.0), (1, 3), (2e6 if case == "3d_stiff" else 0.0)
+        mask = np.zeros(g.shape, bool)
+        mask[90:, 10:30] = mask[:12, 10:30] = True
+    static = StaticResponse(material(), g, comps, stiffness=k)
+    win = WindowedStatic(static, g, mask)
+    assert win.worth
+    slip = {c: np.where(mask, rng.standard_normal(g.shape), 0.0) for c in comps}
+    full = static.traction(slip)
+    got = win.traction({c: slip[c].ravel()[win.points] for c in comps})
+    for c in comps:
+        want = full[c].ravel()[win.points]
+        assert np.max(np.abs(got[c] - want)) < 1e-12 * np.max(np.abs(want)), c
+
+
+def test_a_window_as_long_as_half_the_axis_takes_the_whole_axis():
+    from cracklab import Grid
+    from cracklab.solver.sequence.static import StaticResponse
+    from cracklab.solver.sequence.window import WindowedStatic
+
+    g = Grid(n1=64, n3=1, L1=64.0, L3=1.0)
+    mask = np.zeros(g.shape, bool)
+    mask[:33] = True
+    win = WindowedStatic(StaticResponse(material(), g, (3,)), g, mask)
+    assert not win.worth and win.size == g.shape
+
+
+def test_bp1_on_the_window_gives_the_run_on_the_whole_grid(monkeypatch):
+    """BP1-QD at 200 m to its first event, on the window (400 of 1600 nodes, transforms of 800)
+    and on the whole grid: the same events, steps and fields, the creeping region's included."""
+    import cracklab.solver.sequence.quasi_dynamic as qd
+    from cracklab import simulate
+    from cracklab.analysis import events
+    from cracklab.scenes import bp1
+
+    scene = bp1(dz=200.0, years=210.0, depth=160e3)
+    on = simulate(scene)
+
+    class Whole(qd.WindowedStatic):
+        def __init__(self, *args):
+            super().__init__(*args)
+            self.worth = False
+
+    monkeypatch.setattr(qd, "WindowedStatic", Whole)
+    whole = simulate(scene)
+    e_on, e_whole = events(on), events(whole)
+    assert e_on.sizes["event"] == e_whole.sizes["event"] >= 1
+    for name in ("t_start", "t_end", "peak_slip_rate", "mean_slip"):
+        a, b = e_on[name].values, e_whole[name].values
+        assert np.max(np.abs(a - b) / np.abs(b)) < 1e-6, name
+    assert on.attrs["accepted_steps"] == whole.attrs["accepted_steps"]
+    for name in ("delta_3", "tau_3", "psi"):
+        a, b = on[name].values, whole[name].values
+        assert a.shape == b.shape and np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(b)), name
+    creeping = on.x1.values > 40e3
+    assert np.any(creeping)
+    a, b = on.tau_3.values[:, creeping], whole.tau_3.values[:, creeping]
+    change = b - b[:1]          # what the slip did to the creeping region's traction
+    assert np.max(np.abs(change)) > 1e5
+    assert np.max(np.abs(a - b)) <= 1e-6 * np.max(np.abs(change))
+
+
+def test_a_state_of_a_run_on_the_whole_grid_resumes_on_the_window(monkeypatch):
+    """A checkpoint's state written by a run that held the whole grid (before the window) is
+    taken at the window's points: the resumed run goes on as the whole grid's run does."""
+    import itertools
+
+    import cracklab.solver.sequence.quasi_dynamic as qd
+    from cracklab.scenes import bp1
+    from cracklab.solver.sequence.run import SequenceRun
+
+    scene = bp1(dz=200.0, years=210.0, depth=160e3)
+    windowed = qd.WindowedStatic
+
+    class Whole(windowed):
+        def __init__(self, *args):
+            super().__init__(*args)
+            self.worth = False
+
+    monkeypatch.setattr(qd, "WindowedStatic", Whole)
+    whole = SequenceRun(scene)
+    for _ in itertools.islice(whole, 300):
+        pass
+    state = whole.get_state()
+    assert state["y"].size == 2 * scene.grid.n1
+    ahead = list(itertools.islice(whole, 50))[-1]
+    monkeypatch.setattr(qd, "WindowedStatic", windowed)
+    resumed = SequenceRun(scene, start=state)
+    assert resumed.system.window is not None and resumed.y.size == 2 * resumed.system.n < state["y"].size
+    got = list(itertools.islice(resumed, 50))[-1]
+    assert got.n == ahead.n and abs(got.t - ahead.t) <= 1e-8 * ahead.t      # the step control: round-off in dt
+    for a, b in ((got.delta[3], ahead.delta[3]), (got.psi, ahead.psi), (got.V, ahead.V), (got.tau[3], ahead.tau[3])):
+        assert np.max(np.abs(a - b)) <= 1e-7 * np.max(np.abs(b))
