@@ -170,6 +170,7 @@ class SequenceRecorder:
         self.scene, self.path = scene, path
         self.s1, self.s3 = rec.region_slices(grid)
         self.nodes = rec.station_nodes(grid)
+        self.x1, self.x3 = grid.x1, grid.x3     # the grid computes them when asked: once per run here
         comps = sorted({c for c in scene.components if c in (1, 3)} | set(seq.plate))
         self.fields = [f for f in rec.fields if f == "psi" or f.split("_")[0] in ("delta", "v", "tau")
                        and int(f.split("_")[1]) in comps]
@@ -200,8 +201,8 @@ class SequenceRecorder:
         change = self.events.step(state, vmax, where) if state.n > 0 else None
         end = state.t >= scene.t_end
         if state.n % seq.station_every == 0 or change is not None or end:
-            for name, value in (("t_station", state.t), ("max_slip_rate", vmax), ("x1", grid.x1[where[0]]),
-                                ("x3", grid.x3[where[1]]), ("time_step", state.dt)):
+            for name, value in (("t_station", state.t), ("max_slip_rate", vmax), ("x1", self.x1[where[0]]),
+                                ("x3", self.x3[where[1]]), ("time_step", state.dt)):
                 self.rows[name].append(float(value))
             flat = [i * grid.shape[1] + j for i, j in self.nodes.values()]
             for f in self.station_fields:
