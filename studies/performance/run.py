@@ -3,12 +3,16 @@ markdown table (docs/studies/performance.md quotes it).
 
     .venv/bin/python studies/performance/run.py [--quick] [--out out/performance]
     .venv/bin/python studies/performance/run.py --stages [--rounds 3] [--quick]
+    .venv/bin/python studies/performance/run.py --scaling [--rounds 3] [--quick]
 
 Each row runs in its own process (`cracklab bench --json`), so peak memory is per row.
 ``--stages``: where the time of a step goes (the bench's ``stages_ms``) for mode I, shear
 with slip weakening, shear with rate and state, and bimaterial shear, 256 x 256, the cases
 one after the other in every round; writes stages.json and stages.md (the median round of
-each case).
+each case). ``--scaling``: one core against two (issue 33, target 4): 512 x 512 shear with
+slip weakening at one thread, at two (FFTs and engine) and at two engine threads with one
+FFT thread, alternated in every round, the one-thread step by stage; writes scaling.json
+and scaling.md (each setting's median step and its speed-up on the one-thread median).
 """
 from __future__ import annotations
 
@@ -116,6 +120,52 @@ def stage_table(results) -> str:
     return "\n".join(lines)
 
 
+#: the settings of the scaling study: (name, FFT threads, engine threads)
+SCALING = [("1 thread", 1, 1), ("2 threads", 2, 2), ("2 engine threads, 1 FFT thread", 1, 2)]
+SCALING_CASE = dict(grid=(512, 512), mode="shear", law="slip_weakening", steps=200)
+
+
+def scaling(rounds=3, quick=False):
+    """Every setting of SCALING on SCALING_CASE (32 x 32 with ``quick``), in turn in every
+    round: the bench's results, each with "setting", "round" and the host's "load"."""
+    case = SCALING_CASE
+    (n1, n3), steps = ((32, 32), 40) if quick else (case["grid"], case["steps"])
+    results = []
+    for k in range(rounds):
+        for name, fft_t, eng_t in SCALING:
+            print(f"round {k + 1}: {name}", flush=True)
+            load = os.getloadavg()[0]
+            res = bench(n1, n3, case["mode"], steps, "exponential", threads=fft_t, engine_threads=eng_t,
+                        extra=["--law", case["law"]])
+            results.append({**res, "setting": name, "round": k, "load": load})
+    return results
+
+
+def scaling_table(results) -> str:
+    """Per setting: the rounds' steps, their median, its speed-up on the one-thread median,
+    the median FFT pair and the median step in FFT pairs; then the one-thread round of the
+    median step by stage."""
+    from cracklab.cli.bench import STAGES
+
+    med = lambda xs: sorted(xs)[len(xs) // 2]
+    one = med([r["ms_per_step"] for r in results if r["setting"] == SCALING[0][0]])
+    lines = ["| setting | ms / step (rounds) | median | speed-up | FFT pair ms | step / pair | load |",
+             "|---|---|---|---|---|---|---|"]
+    for name, _, _ in SCALING:
+        rows = [r for r in results if r["setting"] == name]
+        ms, pair = med([r["ms_per_step"] for r in rows]), med([r["fft_pair_ms"] for r in rows])
+        loads = [r["load"] for r in rows]
+        each = ", ".join(f"{r['ms_per_step']:.2f}" for r in rows)
+        lines.append(f"| {name} | {each} | "
+                     f"{ms:.2f} | {one / ms:.2f}x | {pair:.2f} | {ms / pair:.1f} | {min(loads):.1f}-{max(loads):.1f} |")
+    rows = sorted((r for r in results if r["setting"] == SCALING[0][0]), key=lambda r: r["ms_per_step"])
+    r = rows[len(rows) // 2]
+    lines += ["", "one thread, by stage (ms per step): " + ", ".join(
+        f"{s} {r['stages_ms'][s]:.2f}" for s in STAGES if r["stages_ms"].get(s) is not None)
+        + f"; the stages sum to {r['stages_total_ms']:.2f} ms"]
+    return "\n".join(lines)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="two small rows only")
@@ -124,10 +174,18 @@ def main(argv=None):
                          "(E engine threads, F FFT threads); default 1 2 2/1")
     ap.add_argument("--out", default="out/performance")
     ap.add_argument("--stages", action="store_true", help="the breakdown by stage (STAGE_CASES) instead")
-    ap.add_argument("--rounds", type=int, default=3, help="rounds of the breakdown by stage")
+    ap.add_argument("--rounds", type=int, default=3, help="rounds of the breakdown by stage or of the scaling")
+    ap.add_argument("--scaling", action="store_true", help="one core against two (SCALING) instead")
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.scaling:
+        results = scaling(args.rounds, args.quick)
+        (out / "scaling.json").write_text(json.dumps(results, indent=1))
+        md = scaling_table(results)
+        (out / "scaling.md").write_text(md + "\n")
+        print(md)
+        return
     if args.stages:
         results = stages(args.rounds, args.quick)
         (out / "stages.json").write_text(json.dumps(results, indent=1))

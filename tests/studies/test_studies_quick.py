@@ -219,6 +219,26 @@ def test_performance_study_stages_quick(tmp_path):
     assert len(md) == 2 + len(rows) and all(s in md[0] for s in STAGES)
 
 
+def test_performance_scaling_table_from_medians():
+    """studies/performance/run.py --scaling: each setting's median step over the rounds and
+    its speed-up on the one-thread median, and the one-thread step by stage (synthetic
+    results: no bench here)."""
+    from cracklab.cli.bench import STAGES
+
+    perf = _load("performance_study", ROOT / "studies" / "performance" / "run.py")
+    stages = {s: 1.0 for s in STAGES}
+    rows = []
+    for k, (one, two, eng) in enumerate([(26.0, 15.0, 14.0), (25.0, 16.0, 13.0), (30.0, 14.0, 15.0)]):
+        for (name, _, _), ms in zip(perf.SCALING, (one, two, eng)):
+            rows.append({"setting": name, "round": k, "load": 0.5, "ms_per_step": ms, "fft_pair_ms": 2.0,
+                         "stages_ms": stages, "stages_total_ms": float(len(STAGES))})
+    md = perf.scaling_table(rows).splitlines()
+    assert md[2].startswith("| 1 thread | 26.00, 25.00, 30.00 | 26.00 | 1.00x | 2.00 | 13.0 |")
+    assert md[3].startswith("| 2 threads | 15.00, 16.00, 14.00 | 15.00 | 1.73x |")
+    assert md[4].startswith("| 2 engine threads, 1 FFT thread | 14.00, 13.00, 15.00 | 14.00 | 1.86x |")
+    assert md[-1].startswith("one thread, by stage (ms per step): transforms 1.00")
+
+
 def test_mirror_cost_study_summary():
     """studies/performance/mirror.py: medians, per-round and fastest ratios of the half plane
     against the periodic and the doubled grids (synthetic runs: no bench here)."""
