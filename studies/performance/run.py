@@ -179,20 +179,15 @@ def main(argv=None):
     args = ap.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    if args.scaling:
-        results = scaling(args.rounds, args.quick)
-        (out / "scaling.json").write_text(json.dumps(results, indent=1))
-        md = scaling_table(results)
-        (out / "scaling.md").write_text(md + "\n")
-        print(md)
-        return
-    if args.stages:
-        results = stages(args.rounds, args.quick)
-        (out / "stages.json").write_text(json.dumps(results, indent=1))
-        md = stage_table(results)
-        (out / "stages.md").write_text(md + "\n")
-        print(md)
-        return
+    for flag, name, run, tabulate in ((args.scaling, "scaling", scaling, scaling_table),
+                                      (args.stages, "stages", stages, stage_table)):
+        if flag:
+            results = run(args.rounds, args.quick)
+            (out / f"{name}.json").write_text(json.dumps(results, indent=1))
+            md = tabulate(results)
+            (out / f"{name}.md").write_text(md + "\n")
+            print(md)
+            return
     results = []
     configs = []
     for spec in args.threads:
