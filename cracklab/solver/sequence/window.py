@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft as sfft
 
+from ..spectral import backend_name, pyfftw
+
 
 def periodic_box(mask_1d) -> tuple[int, int]:
     """(start, length) of the shortest run of consecutive indices, with wrap-around, holding
@@ -70,6 +72,7 @@ class WindowedStatic:
             dst.append(d % M)
         # transform only the axes longer than a node (the plane problem's x3 is one)
         self.fft_axes = tuple(ax for ax in range(2) if self.size[ax] > 1) or (0,)
+        self._fftw = None       # FFTW's plans of the padded box, when the backend is pyfftw
         self.kernels = {}
         for b in self.comps:
             unit = {c: np.zeros(shape) for c in self.comps}
@@ -83,6 +86,8 @@ class WindowedStatic:
     def traction(self, slip: dict) -> dict:
         """{component: static traction at ``points``} of {component: slip at ``points``} that
         is zero outside the window."""
+        if backend_name() == "pyfftw":
+            return self._traction_fftw(slip)
         spectra = {b: self._forward(np.asarray(slip[b], dtype=float)[self.to_box].reshape(self.box))
                    for b in self.comps}
         out = {}
@@ -103,3 +108,38 @@ class WindowedStatic:
             ax = self.fft_axes[0]
             return sfft.irfft(spectrum, n=self.size[ax], axis=ax)
         return sfft.irfftn(spectrum, s=self.size, axes=self.fft_axes)
+
+    def _traction_fftw(self, slip):
+        """:meth:`traction` through FFTW plans of the padded box, made at the first call (the
+        padding stays zero: a real-to-complex plan leaves its input alone; 1/N is in the
+        kernels)."""
+        if self._fftw is None:
+            self._fftw = self._plans()
+        box, (m1, m3) = self.box, self.box
+        fwd, inv, spectra, kernels = self._fftw
+        for b in self.comps:
+            fwd.input_array[:m1, :m3] = np.asarray(slip[b], dtype=float)[self.to_box].reshape(box)
+            fwd.execute()
+            spectra[b][...] = fwd.output_array
+        out = {}
+        for a in self.comps:
+            acc = inv.input_array
+            np.multiply(kernels[a, self.comps[0]], spectra[self.comps[0]], out=acc)
+            for b in self.comps[1:]:
+                acc += kernels[a, b] * spectra[b]
+            inv.execute()
+            out[a] = np.ascontiguousarray(inv.output_array[:m1, :m3]).ravel()[self.from_box]
+        return out
+
+    def _plans(self):
+        flags, axes = ("FFTW_MEASURE",), self.fft_axes
+        real = pyfftw.empty_aligned(self.size, dtype="float64")
+        spec = pyfftw.empty_aligned(self.kernels[self.comps[0], self.comps[0]].shape, dtype="complex128")
+        fwd = pyfftw.FFTW(real, spec, axes=axes, flags=flags)
+        inv = pyfftw.FFTW(pyfftw.empty_aligned(spec.shape, dtype="complex128"),
+                          pyfftw.empty_aligned(self.size, dtype="float64"), axes=axes,
+                          direction="FFTW_BACKWARD", flags=flags)
+        fwd.input_array[...] = 0.0          # planning wrote into it; the padding stays zero from here
+        scale = 1.0 / np.prod([self.size[ax] for ax in axes])
+        kernels = {k: v * scale for k, v in self.kernels.items()}
+        return fwd, inv, {b: np.empty_like(spec) for b in self.comps}, kernels
