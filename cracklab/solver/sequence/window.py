@@ -70,9 +70,13 @@ class WindowedStatic:
             d = np.arange(n) if m == n else np.arange(-(m - 1), m)
             src.append(d % n)
             dst.append(d % M)
-        # transform only the axes longer than a node (the plane problem's x3 is one)
+        # transform only the axes longer than a node (the plane problem's x3 is one); through
+        # FFTW plans of the padded box (made at the first call) when the backend is pyfftw,
+        # with 1/N in the kernels
         self.fft_axes = tuple(ax for ax in range(2) if self.size[ax] > 1) or (0,)
-        self._fftw = None       # FFTW's plans of the padded box, when the backend is pyfftw
+        self.fftw = backend_name() == "pyfftw"
+        self._plans = None
+        scale = 1.0 / np.prod([self.size[ax] for ax in self.fft_axes]) if self.fftw else 1.0
         self.kernels = {}
         for b in self.comps:
             unit = {c: np.zeros(shape) for c in self.comps}
@@ -81,13 +85,11 @@ class WindowedStatic:
             for a in self.comps:
                 K = np.zeros(self.size)
                 K[np.ix_(dst[0], dst[1])] = F[a][np.ix_(src[0], src[1])]
-                self.kernels[a, b] = self._forward(K)
+                self.kernels[a, b] = scale * self._scipy_forward(K)
 
     def traction(self, slip: dict) -> dict:
         """{component: static traction at ``points``} of {component: slip at ``points``} that
         is zero outside the window."""
-        if backend_name() == "pyfftw":
-            return self._traction_fftw(slip)
         spectra = {b: self._forward(np.asarray(slip[b], dtype=float)[self.to_box].reshape(self.box))
                    for b in self.comps}
         out = {}
@@ -98,48 +100,41 @@ class WindowedStatic:
         return out
 
     def _forward(self, box):
+        """The spectrum of ``box`` padded with zeros to ``size``."""
+        if not self.fftw:
+            return self._scipy_forward(box)
+        fwd, _ = self._plans or self._plan()
+        fwd.input_array[:self.box[0], :self.box[1]] = box       # the padding stays zero
+        fwd.execute()
+        return fwd.output_array.copy()
+
+    def _inverse(self, spectrum):
+        """The field of ``spectrum`` over ``size`` (1/N in the kernels with FFTW)."""
+        if not self.fftw:
+            if len(self.fft_axes) == 1:
+                ax = self.fft_axes[0]
+                return sfft.irfft(spectrum, n=self.size[ax], axis=ax)
+            return sfft.irfftn(spectrum, s=self.size, axes=self.fft_axes)
+        _, inv = self._plans or self._plan()
+        inv.input_array[...] = spectrum
+        inv.execute()
+        return inv.output_array
+
+    def _scipy_forward(self, box):
         if len(self.fft_axes) == 1:       # the 1D transform costs less to call
             ax = self.fft_axes[0]
             return sfft.rfft(box, n=self.size[ax], axis=ax)
         return sfft.rfftn(box, s=self.size, axes=self.fft_axes)
 
-    def _inverse(self, spectrum):
-        if len(self.fft_axes) == 1:
-            ax = self.fft_axes[0]
-            return sfft.irfft(spectrum, n=self.size[ax], axis=ax)
-        return sfft.irfftn(spectrum, s=self.size, axes=self.fft_axes)
-
-    def _traction_fftw(self, slip):
-        """:meth:`traction` through FFTW plans of the padded box, made at the first call (the
-        padding stays zero: a real-to-complex plan leaves its input alone; 1/N is in the
-        kernels)."""
-        if self._fftw is None:
-            self._fftw = self._plans()
-        box, (m1, m3) = self.box, self.box
-        fwd, inv, spectra, kernels = self._fftw
-        for b in self.comps:
-            fwd.input_array[:m1, :m3] = np.asarray(slip[b], dtype=float)[self.to_box].reshape(box)
-            fwd.execute()
-            spectra[b][...] = fwd.output_array
-        out = {}
-        for a in self.comps:
-            acc = inv.input_array
-            np.multiply(kernels[a, self.comps[0]], spectra[self.comps[0]], out=acc)
-            for b in self.comps[1:]:
-                acc += kernels[a, b] * spectra[b]
-            inv.execute()
-            out[a] = np.ascontiguousarray(inv.output_array[:m1, :m3]).ravel()[self.from_box]
-        return out
-
-    def _plans(self):
+    def _plan(self):
+        """FFTW's plans of the padded box (a real-to-complex plan leaves its input alone)."""
         flags, axes = ("FFTW_MEASURE",), self.fft_axes
-        real = pyfftw.empty_aligned(self.size, dtype="float64")
-        spec = pyfftw.empty_aligned(self.kernels[self.comps[0], self.comps[0]].shape, dtype="complex128")
-        fwd = pyfftw.FFTW(real, spec, axes=axes, flags=flags)
-        inv = pyfftw.FFTW(pyfftw.empty_aligned(spec.shape, dtype="complex128"),
+        spec_shape = self.kernels[self.comps[0], self.comps[0]].shape
+        fwd = pyfftw.FFTW(pyfftw.empty_aligned(self.size, dtype="float64"),
+                          pyfftw.empty_aligned(spec_shape, dtype="complex128"), axes=axes, flags=flags)
+        inv = pyfftw.FFTW(pyfftw.empty_aligned(spec_shape, dtype="complex128"),
                           pyfftw.empty_aligned(self.size, dtype="float64"), axes=axes,
                           direction="FFTW_BACKWARD", flags=flags)
         fwd.input_array[...] = 0.0          # planning wrote into it; the padding stays zero from here
-        scale = 1.0 / np.prod([self.size[ax] for ax in axes])
-        kernels = {k: v * scale for k, v in self.kernels.items()}
-        return fwd, inv, {b: np.empty_like(spec) for b in self.comps}, kernels
+        self._plans = (fwd, inv)
+        return self._plans
