@@ -14,7 +14,6 @@ import os
 import subprocess
 import sys
 import time
-import traceback
 from pathlib import Path
 
 from s3_server import free_port
@@ -64,9 +63,9 @@ def scheduler_and_workers(where: Path, n: int = 2):
         _stop(procs)
 
 
-def members_running() -> int:
-    """How many threads of this process are running a sweep's member
-    (``cracklab.ensemble.running._member_task``); called on a worker by ``client.run``: a
-    task that dask has given up (its client gone) runs on in its thread until it returns."""
-    return sum(any(f.f_code.co_name == "_member_task" for f, _ in traceback.walk_stack(frame))
-               for frame in sys._current_frames().values())
+def members_running(dask_worker) -> int:
+    """How many tasks occupy a thread of this worker (dask's ``WorkerState.all_running_tasks``,
+    cancelled ones included); called on a worker by ``client.run``, where only a sweep's
+    members run: a task that dask has given up (its client gone) runs on in its thread
+    until it returns."""
+    return len(dask_worker.state.all_running_tasks)
