@@ -207,8 +207,9 @@ def test_bench_stages_with_the_overlap(monkeypatch):
     out = run(32, 32, "shear", 60, engine="exponential", engine_threads=2)
     stages = out["stages_ms"]
     assert out["overlap"] and out["worker_ms"] > 0
-    # the advance is the worker's: at most the caller's share of it is left on this thread
-    assert stages["advance"] < out["worker_ms"]
+    # the advance is the worker's: the caller's share of it is small against the known sleep
+    # of the law (a bound with a wide margin, not a comparison of two timings of the same size)
+    assert stages["advance"] < 0.5 * 1e3 * SLEEP
     assert stages["law"] >= 2e3 * SLEEP and stages["glue"] < 0.5 * 1e3 * SLEEP
     total = sum(stages.values())
     assert abs(total / out["stages_total_ms"] - 1) < 1e-9, (total, out["stages_total_ms"])
