@@ -24,6 +24,11 @@ the run); step lengths (not times) are stored, so
 the ages of the pieces are sums of step lengths and keep their precision late in a long
 run.
 
+The exponentials of a step are shared: e^{lam_p r h} of the step serves the slab's parts
+of length r h or r h - T0 and, kept to the next step, that step's older piece; each slab
+piece starts at the end of the one before (e^{lam_p x} by products), and 1 / lam_p is
+computed once, so the walk computes e^{lam_p L} only for the pieces no step has.
+
 A step is taken in two calls: :meth:`VariableHistory.prepare` (h, with the step's start
 value already pushed) gives I(t + h) = A + B V(t + h) for every mode, linear in the
 unknown end value (the interface law then finds V(t + h)); :meth:`commit` (V(t + h)) pushes
@@ -63,7 +68,7 @@ def memory(kernel, nu, r, h_floor, *, T0=T0_VARIABLE, tol=None) -> int:
     states, the step's prepared states and the weights of a run of steps of ``h_floor``."""
     cap = _capacity(r, T0, h_floor)
     P = get_fit(kernel, nu, "velocity", T0=T0, tol=tol).lam.size
-    return int(cap.sum() * 24 + (cap.max() + 1) * 8 + np.size(r) * (10 * P * 16 + 8 + 24 + 32))
+    return int(cap.sum() * 24 + (cap.max() + 1) * 8 + np.size(r) * (12 * P * 16 + 8 + 24 + 32))
 
 
 class NearTable:
@@ -134,6 +139,12 @@ class VariableHistory:
         self._kR = np.empty((M, P), dtype=complex)
         self._kI = np.empty((M, P), dtype=complex)
         self._sB = np.empty((M, P), dtype=complex)
+        # e^{lam_p r h} of the step prepared (``_g``) and of the step committed last (``_glast``,
+        # valid when ``_glast_n`` is the step ends pushed): the walk's pieces of those lengths
+        # take them instead of computing them again
+        self._g = np.zeros((M, P), dtype=complex)
+        self._glast = np.zeros((M, P), dtype=complex)
+        self._glast_n = -1
         self.last_h, self.run = None, 0     # the last step committed, and how many in a row were it
         self._cache = None                  # the weights of a run of equal steps (h, arrays)
 
@@ -158,7 +169,8 @@ class VariableHistory:
         kR, kI, sB = self._kR, self._kI, self._sB
         _prepare(self.r, self.lam, self.coef, self.near.p0, self.near.p00, self.near.half, self.T0,
                  self.ring, self.off, self.cap, self.hring, self.hcap, self.first, self.n, h,
-                 self.SR, self.SI, A, B, kR, kI, sB, cache is not None, self.run, *(cache or self._NONE))
+                 self.SR, self.SI, A, B, kR, kI, sB, self._g, self._glast, self._glast_n == self.n,
+                 cache is not None, self.run, *(cache or self._NONE))
         self._prep = (h, kR, kI, sB)
         return A, B
 
@@ -190,6 +202,8 @@ class VariableHistory:
         h, kR, kI, sB = self._prep
         V = np.ascontiguousarray(V, dtype=complex)
         _advance(kR, kI, sB, V, self.SR, self.SI)
+        self._g, self._glast = self._glast, self._g       # the step's e^{lam r h}: the newest piece's from here
+        self._glast_n = self.n + 1
         self.hring[self.n % self.hcap] = h
         self.run = self.run + 1 if h == self.last_h else 1
         self.last_h = h
@@ -204,7 +218,8 @@ class VariableHistory:
     def get_state(self) -> dict:
         return {"ring": self.ring.copy(), "hring": self.hring.copy(), "first": self.first.copy(), "n": self.n,
                 "started": self.started, "SR": self.SR.copy(), "SI": self.SI.copy(),
-                "last_h": self.last_h, "run": self.run}
+                "last_h": self.last_h, "run": self.run,
+                "g_last": self._glast.copy() if self._glast_n == self.n else None}
 
     def set_state(self, state: dict) -> None:
         self.ring = np.array(state["ring"], dtype=complex)
@@ -215,6 +230,9 @@ class VariableHistory:
         self.SI = np.array(state["SI"], dtype=complex)
         self.last_h = None if state["last_h"] is None else float(state["last_h"])
         self.run = int(state["run"])
+        g = state.get("g_last")         # None (or absent: a state written before it was kept): computed again
+        self._glast = np.zeros_like(self.SR) if g is None else np.array(g, dtype=complex)
+        self._glast_n = -1 if g is None else self.n
         self._prep = None
 
 
@@ -315,13 +333,56 @@ def _slab(lam, elo, ua, ub, lo, hi, rk, ea, eb):
 
 
 @njit()
+def _slab_chain(lam, il, il2, ex, known, x, L, d, ca, cb, rk, ea, eb):
+    """``_slab``'s weights of a piece whose part in the slab starts at x and is L long, from
+    ex_p = e^{lam_p x} (then set to e^{lam_p (x + L)}, the next older piece's start):
+    e^{lam_p L} is ``known[p]`` when given (an array), else computed; 1 / lam_p and
+    1 / lam_p^2 come as ``il``, ``il2``, so no complex division is left per term."""
+    Ld = L / d
+    for p in range(lam.size):
+        if lam[p].real * x < -NEGLIGIBLE:      # e^{lam x} below 2e-22, and beyond x too
+            ea[p] = 0.0
+            eb[p] = 0.0
+            ex[p] = 0.0
+            continue
+        z = lam[p] * L
+        if z.real < -NEGLIGIBLE:
+            e = known[p] if known.size else 0.0
+            f1 = -il[p] / L
+            f2 = il2[p] / (L * L)
+        elif abs(z) < 1e-3:
+            z2 = z * z
+            e = known[p] if known.size else 1.0 + z * (1.0 + z / 2.0 * (1.0 + z / 3.0 * (1.0 + z / 4.0 * (1.0 + z / 5.0))))
+            f1 = 1.0 + z / 2.0 + z2 / 6.0 + z2 * z / 24.0 + z2 * z2 / 120.0
+            f2 = 0.5 + z / 3.0 + z2 / 8.0 + z2 * z / 30.0 + z2 * z2 / 144.0
+        else:
+            e = known[p] if known.size else np.exp(z)
+            f1 = (e - 1.0) * il[p] / L
+            f2 = (e * (z - 1.0) + 1.0) * il2[p] / (L * L)
+        w = ex[p] * (L / rk)
+        ea[p] = w * (ca * f1 + Ld * f2)
+        eb[p] = w * (cb * f1 - Ld * f2)
+        ex[p] = ex[p] * e
+
+
+@njit()
 def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first, n, h, SR, SI, A, B, kR, kI, sB,
-             cached, run, cL, cw, cwo, ce0, cs, cg):
+             gh, glast, last_ok, cached, run, cL, cw, cwo, ce0, cs, cg):
+    """I(t + h) = A + B V(t + h) per mode (module docstring); ``gh`` gets e^{lam_p r h} of
+    this step, ``glast`` holds that of the step before when ``last_ok``."""
     M = r.size
     P = lam.size
     elo = np.exp(lam * T0)
+    emlo = np.exp(-lam * T0)
+    il = 1.0 / lam
+    il2 = il * il
     ea = np.empty(P, dtype=np.complex128)
     eb = np.empty(P, dtype=np.complex128)
+    ex = np.empty(P, dtype=np.complex128)      # e^{lam_p x} at the start x of a slab piece
+    eL = np.empty(P, dtype=np.complex128)      # e^{lam_p L} of the newest piece's part in the slab
+    none = np.empty(0, dtype=np.complex128)
+    P0_0, P00_0 = _p(p0, p00, half, 0.0)       # at the window's ends, the same for every mode
+    P0_T, P00_T = _p(p0, p00, half, T0)
     for k in range(M):
         rk = r[k]
         acc = 0.0 + 0.0j
@@ -337,6 +398,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                 i = i - 1 if i > 0 else ck - 1
             bk = cw[o]
             for p in range(P):
+                gh[k, p] = cg[k, p]
                 kR[k, p] = cg[k, p] * SR[k, p]
                 kI[k, p] = cg[k, p] * SI[k, p]
                 sB[k, p] = 0.0
@@ -357,14 +419,22 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
             hi = T0 + rk * h
             for p in range(P):
                 z = lam[p] * (rk * h)
-                g = 0.0 if z.real < -NEGLIGIBLE else np.exp(z)
+                # e^z, and the newest piece's part in the slab, (T0, r h) when it crosses T0:
+                # e^{lam (r h - T0)}, each where it is not negligible
+                g = np.exp(z) if z.real > -NEGLIGIBLE + lam[p].real * T0 else 0.0
+                eL[p] = g * emlo[p]
+                if z.real < -NEGLIGIBLE:
+                    g = 0.0
+                gh[k, p] = g
                 kR[k, p] = g * SR[k, p]
                 kI[k, p] = g * SI[k, p]
                 sB[k, p] = 0.0
+                ex[p] = elo[p]                  # the slab starts at u = T0
             # the pieces, newest first: piece j runs from step end j to j + 1 (j = n: the step);
-            # P0, P00 at a piece's older end are those at the next older piece's newer end
+            # P0, P00 at a piece's older end are those at the next older piece's newer end;
+            # the slab's pieces follow one another, so each starts where the last one ended
             ub = 0.0
-            P0x, P00x = _p(p0, p00, half, 0.0)
+            P0x, P00x = P0_0, P00_0
             i = n % ck                  # the ring's slot of step end j
             ih = n % hcap               # the slot of step j's length
             Vb = 0.0 + 0.0j
@@ -373,15 +443,35 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                 ua = ub + rk * hj
                 Va = ring[base + i]
                 if ub < T0:                                   # near: the exact kernel
-                    y = ua if ua < T0 else T0
-                    P0y, P00y = _p(p0, p00, half, y)
+                    if ua < T0:
+                        y = ua
+                        P0y, P00y = _p(p0, p00, half, y)
+                    else:
+                        y = T0
+                        P0y, P00y = P0_T, P00_T
                     wa, wb = _near_w(P0x, P00x, P0y, P00y, ua, ub, y)
                     P0x, P00x = P0y, P00y
                     acc += (wa * Va + wb * Vb) / rk
                     if j == n:
                         bk += wb / rk
                 if ua > lo and ub < hi:                        # the slab that crossed u = T0
-                    _slab(lam, elo, ua, ub, lo, hi, rk, ea, eb)
+                    from_lo = not ub > lo
+                    to_hi = not ua < hi
+                    x = lo if from_lo else ub
+                    y = hi if to_hi else ua
+                    d = ua - ub
+                    # e^{lam L} of the part known already: all of the slab (r h), the newest
+                    # piece's part (r h - T0), the step before's whole (its own e^{lam r h}) or
+                    # its part up to hi (T0)
+                    if from_lo and to_hi:
+                        known = gh[k]
+                    elif from_lo and j == n:
+                        known = eL
+                    elif j == n - 1 and not from_lo and last_ok:
+                        known = elo if to_hi else glast[k]
+                    else:
+                        known = none
+                    _slab_chain(lam, il, il2, ex, known, x, y - x, d, (x - ub) / d, (ua - x) / d, rk, ea, eb)
                     for p in range(P):
                         kR[k, p] += ea[p] * Va.real + eb[p] * Vb.real
                         kI[k, p] += ea[p] * Va.imag + eb[p] * Vb.imag

@@ -113,7 +113,8 @@ def test_the_memory_estimate_is_what_the_history_holds():
         eng.commit(np.ones(r.size))
     eng.prepare(0.01)
     prep = sum(a.nbytes for a in eng._prep[1:]) + sum(a.nbytes for a in eng._cache[1])
-    held = eng.ring.nbytes + eng.hring.nbytes + eng.SR.nbytes + eng.SI.nbytes + prep + eng.first.nbytes + r.nbytes
+    held = (eng.ring.nbytes + eng.hring.nbytes + eng.SR.nbytes + eng.SI.nbytes + prep + eng.first.nbytes + r.nbytes
+            + eng._g.nbytes + eng._glast.nbytes)
     assert abs(memory("II", NU, r, 0.01) - held) <= 0.05 * held, (memory("II", NU, r, 0.01), held)
 
 
@@ -129,3 +130,30 @@ def test_a_run_of_equal_steps_reuses_its_weights(monkeypatch):
     assert np.max(np.abs(fast - general)) <= 1e-12 * np.max(np.abs(general))
     err = max(abs(fast[m - 1] - exact("II", t, V, m)) for m in (100, 620, 630, 651))
     assert err <= 5 * DEFAULT_TOL["II"] * np.max(np.abs(V)), err
+
+
+def test_the_exponentials_kept_from_the_last_step_are_the_ones_computed():
+    """A step's e^{lam r h}, kept for the next step's walk, gives the convolution that
+    computing them again gives (a state without them: a checkpoint of an older version),
+    to round-off, over modes whose windows hold one piece to dozens and steps that
+    grow, shrink and repeat (the run of equal steps' weights included)."""
+    r = 2 * np.pi * np.arange(1, 300) / 2e4 * 3000.0
+    h = np.concatenate([np.full(12, 0.004), 0.004 * 1.4 ** np.arange(1, 12), [0.3, 0.05, 0.2, 3.0, 1e4, 0.01]])
+    V = np.exp(1j * np.outer(np.arange(h.size + 1), r) * 1e-3) * (1 + np.arange(h.size + 1))[:, None]
+    for cut in (5, 14, 20, 26):
+        eng = VariableHistory("II", NU, r, 0.004)
+        eng.start(V[0])
+        for j in range(cut):
+            eng.prepare(h[j])
+            eng.commit(V[j + 1])
+        state = eng.get_state()
+        assert state["g_last"] is not None
+        again = VariableHistory("II", NU, r, 0.004)
+        again.set_state({**state, "g_last": None})
+        for j in range(cut, min(cut + 3, h.size)):
+            A, B = eng.prepare(h[j])
+            A2, B2 = again.prepare(h[j])
+            assert np.max(np.abs(A - A2)) <= 1e-12 * np.max(np.abs(A)), (cut, j)
+            assert np.max(np.abs(B - B2)) <= 1e-12 * np.max(np.abs(B)), (cut, j)
+            eng.commit(V[j + 1])
+            again.commit(V[j + 1])
