@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import InputError
+from ...jit import njit
 from .mirror import mirror_index
 from .static import StaticResponse
 from .window import WindowedStatic
@@ -94,6 +95,15 @@ class QuasiDynamic:
                 self.at[pts[slid[self._half]]] = True
                 self._sigma_half = np.ascontiguousarray(self.sigma_s[self._half])
         self.solved = int(np.count_nonzero(self.slides)) if self._half is None else self._half.size
+        # one slipping component: ``rates`` gathers and scatters in two compiled passes
+        # (``_gather``, ``_scatter``), the same arithmetic as the general path's
+        self._slid = slid.astype(np.int64)
+        self._creep_at = np.flatnonzero(self.creep).astype(np.int64)
+        every = np.arange(slid.size, dtype=np.int64)
+        self._solve_at = every if self._half is None else self._half.astype(np.int64)
+        self._solve_of = every if self._half is None else self._both.astype(np.int64)
+        self._image_at = np.zeros(0, np.int64) if self.image is None else self.image.astype(np.int64)
+        self._sigma_solved = self.sigma_s if self._half is None else self._sigma_half
         self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -186,6 +196,8 @@ class QuasiDynamic:
 
     def rates(self, t, y):
         """dy/dt at (t, y); keeps (V, tau, v) of the evaluation in ``last``."""
+        if len(self.comps) == 1:
+            return self._rates_one(t, y)
         delta, psi = self.split(y)
         tau = self.traction(t, y)
         s = self.slides
@@ -217,8 +229,65 @@ class QuasiDynamic:
         self.last = (V, tau, {c: dd[c].copy() for c in self.comps})
         return dy
 
+    def _rates_one(self, t, y):
+        """``rates`` of one slipping component: the traction gathered at the points solved
+        (a node and its image once) and the solve's rates scattered back, compiled."""
+        n, c = self.n, self.comps[0]
+        F = self.elastic({c: y[:n]}, t)[c]
+        tau = np.empty(n)
+        T = np.empty(self._solve_at.size)
+        psi = np.empty(self._solve_at.size)
+        _gather(self.tau0[c], F, self.stiffness * self.plate[c] * t, self._image_at, self._slid, self._solve_at,
+                y[n:], tau, T, psi)
+        Vh, self.lnV, dph = self.law.slide_rates(T, psi, self._sigma_solved, self.eta, guess=self.lnV, at=self.at)
+        dy = np.zeros_like(y)
+        V = np.zeros(n)
+        _scatter(tau, self._slid, self._solve_of, Vh, dph, self._creep_at, self.plate[c], self.plate_speed, self.eta,
+                 dy[:n], dy[n:], V)
+        self.last = (V, {c: tau}, {c: dy[:n].copy()})
+        return dy
+
     def scales(self, y):
         """The error scale of each unknown relative to the tolerance: slip against L + |slip|,
         state against a (an error of a in psi is a factor e in V)."""
         delta, _ = self.split(y)
         return np.concatenate([self._L + np.abs(delta[c]) for c in self.comps] + [self._a]), self._keep
+
+
+@njit()
+def _gather(tau0, F, shift, image, slid, solve_at, psi, tau, T, psi_solved):
+    """tau = tau0 + F + shift (made even about the ``image`` of each point when given), and
+    at the points solved (``slid[solve_at]``) |tau| into T and psi into psi_solved."""
+    for i in range(tau.size):
+        tau[i] = tau0[i] + F[i] + shift
+    if image.size:
+        for i in range(tau.size):
+            j = image[i]
+            if j > i:
+                x = 0.5 * (tau[i] + tau[j])
+                tau[i] = x
+                tau[j] = x
+            elif j == i:
+                tau[i] = 0.5 * (tau[i] + tau[i])
+    for k in range(solve_at.size):
+        i = slid[solve_at[k]]
+        T[k] = abs(tau[i])
+        psi_solved[k] = psi[i]
+
+
+@njit()
+def _scatter(tau, slid, solve_of, V_solved, dpsi_solved, creep_at, plate, speed, eta, dd, dpsi, V):
+    """The rates of the sliding points from their solve (V tau / |tau|), the plate's on the
+    creeping ones; tau then less eta times the slip rate (the radiation damping)."""
+    for k in range(slid.size):
+        i = slid[k]
+        v = V_solved[solve_of[k]]
+        T = abs(tau[i])
+        dd[i] = (v / T) * tau[i] if T > 0 else 0.0
+        V[i] = v
+        dpsi[i] = dpsi_solved[solve_of[k]]
+    for i in creep_at:
+        dd[i] = plate
+        V[i] = speed
+    for i in range(tau.size):
+        tau[i] -= eta * dd[i]
