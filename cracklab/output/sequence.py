@@ -170,7 +170,7 @@ class SequenceRecorder:
         self.scene, self.path = scene, path
         self.s1, self.s3 = rec.region_slices(grid)
         self.nodes = rec.station_nodes(grid)
-        self.flat_nodes = [i * grid.shape[1] + j for i, j in self.nodes.values()]     # the stations' flat indices
+        self.flat_nodes = np.array([i * grid.shape[1] + j for i, j in self.nodes.values()], dtype=np.int64)
         self.x1, self.x3 = grid.x1, grid.x3     # the grid computes them when asked: once per run here
         comps = sorted({c for c in scene.components if c in (1, 3)} | set(seq.plate))
         self.fields = [f for f in rec.fields if f == "psi" or f.split("_")[0] in ("delta", "v", "tau")
@@ -205,12 +205,8 @@ class SequenceRecorder:
             for name, value in (("t_station", state.t), ("max_slip_rate", vmax), ("x1", self.x1[where[0]]),
                                 ("x3", self.x3[where[1]]), ("time_step", state.dt)):
                 self.rows[name].append(float(value))
-            for f in self.station_fields:
-                if f.startswith("tau_"):
-                    self.series[f].append(list(state.tau_at(self.flat_nodes)[int(f.split("_")[1])]))
-                    continue
-                x = _field(state, f)
-                self.series[f].append([x[i, j] for i, j in self.nodes.values()])
+            for f in self.station_fields:       # read at the stations only (on a window: no field spread)
+                self.series[f].append(list(state.at(f, self.flat_nodes)))
         in_event = self.events.current is not None
         now = time.perf_counter()
         if self._clock is not None:

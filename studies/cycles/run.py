@@ -280,7 +280,8 @@ def _fd_section(res):
     lines = ["## BP1-FD: the fully dynamic response", "",
              "The same fault with `dynamic=True`: the elastodynamic history of every mode kept exactly at a "
              "variable step (docs/reference/equations.md, \"Sequences: the dynamic response at a variable step\"), "
-             "tolerance 1e-5: a predictor-corrector of order 2 whose step never goes below the dynamic step "
+             f"tolerance {next(iter(fd.values()))['tolerance']:g}: a predictor-corrector of order 2 whose step "
+             "never goes below the dynamic step "
              "beta dz / c_s = 0.5 dz / c_s, and Dormand-Prince 5(4) on the same system while the largest slip rate "
              "is below `sequence.slow_rate` (1.1e-4 m/s here).", "",
              "| dz | nodes | years | wall time | accepted steps | smallest step | largest step | steps in events | "
@@ -373,10 +374,37 @@ def _fd_convergence(fd, keys, checks) -> list:
                              + ", ".join(f"{x - y:+.3f}" for x, y in zip(t[:m], ref[:m])) + " years")
             r0 = next(iter(checks.values()))
             lines += [f"Not the time step: at dz = {r0['dz']:g} m to {r0['years']:g} years, against the run above "
-                      "(beta 0.5, tolerance 1e-5), the first earthquakes move " + "; ".join(parts)
+                      f"(beta 0.5, tolerance {base['tolerance']:g}), the first earthquakes move " + "; ".join(parts)
                       + " (`python -m studies.cycles.fd_checks`), a small fraction of the difference between the "
                       "grids at those earthquakes.", ""]
     return lines
+
+
+def _tolerance_section(checks, base, grid_yr) -> list:
+    """The page's lines on the step's tolerance: ``checks`` (studies/cycles/tolerance.py, runs
+    at tighter tolerances at the dz of ``base``, the page's run there) against ``base``;
+    ``grid_yr``: the largest event-time difference between the two grids."""
+    if not checks:
+        return []
+    first = next(iter(checks.values()))
+    if float(first["dz"]) != float(base["dz"]):
+        return []
+    ref = base["events"]
+    rows = ["### The step's tolerance", "",
+            f"BP1-QD at dz = {first['dz']:g} m over {first['years']:g} years at tighter tolerances than the "
+            f"builder's {base['tolerance']:g} (`python -m studies.cycles.tolerance`): the largest change of an "
+            "event's start and of a peak slip rate against the run above, and the steps taken.", "",
+            "| tolerance | accepted steps | wall time | largest change of an event's start | of a peak slip rate |",
+            "|---|---|---|---|---|",
+            f"| {base['tolerance']:g} (the run above) | {base['accepted_steps']} | {base['wall_s']:.0f} s | - | - |"]
+    for tol, r in checks.items():
+        m = min(len(r["t_start_s"]), len(ref["t_start"]))
+        dt = max(abs(a - b) for a, b in zip(r["t_start_s"][:m], ref["t_start"][:m])) / YEAR
+        dp = max(abs(a / b - 1) for a, b in zip(r["peak_slip_rate"][:m], ref["peak_slip_rate"][:m]))
+        rows.append(f"| {tol} | {r['accepted_steps']} | {r['wall_s']:.0f} s | {dt:.2g} years | {dp:.2g} |")
+    rows += ["", f"Against the grid's {grid_yr:.3f} years between the two spacings, the tolerance's share is "
+             "negligible: the builder's tolerance buys the steps without moving the results.", ""]
+    return rows
 
 
 def _cost_section(res, dzs):
@@ -426,7 +454,8 @@ def write_page(res, dzs, page, figs, command):
              "transition to velocity strengthening over 3 km, friction to 40 km and creep at the plate rate "
              "1e-9 m/s below. `cracklab.scenes.bp1` builds it (the free surface as a mirror, the creeping region "
              "to 320 km); the response is quasi-dynamic (the static kernel plus radiation damping), the time step "
-             "adaptive (Dormand-Prince 5(4), tolerance 1e-7). An event lasts while the largest slip rate exceeds "
+             f"adaptive (Dormand-Prince 5(4), tolerance {runs[f'{dzs[0]:g}']['tolerance']:g}). An event lasts while "
+             "the largest slip rate exceeds "
              "1 mm/s.", "",
              "## Cost", "",
              "| dz | nodes | years | wall time | accepted steps | smallest step | largest step | steps in events | "
@@ -473,6 +502,7 @@ def write_page(res, dzs, page, figs, command):
                   f"{max(abs(x - y) for x, y in zip(qa[:n], qb[:n])):.3f} years of each other over "
                   f"{a['years']:g} years; the mean recurrence interval is {ra:.3f} and {rb:.3f} years "
                   f"({100 * abs(ra / rb - 1):.3f} %), each interval within {100 * worst:.2f} %.", ""]
+        lines += _tolerance_section(res.get("qd_tolerance"), b, max(abs(x - y) for x, y in zip(qa[:n], qb[:n])))
     fine = runs[f"{dzs[-1]:g}"]
     q = fine["earthquakes_yr"]
     n = min(len(q), len(BICYCLE_YR))
@@ -534,7 +564,7 @@ def main(argv=None) -> int:
     p.add_argument("--dz", type=float, nargs="+", default=[50.0, 25.0])
     p.add_argument("--fd", type=float, nargs="*", default=[], help="spacings of BP1-FD runs")
     p.add_argument("--years", type=float, default=1500.0)
-    p.add_argument("--tolerance", type=float, default=1e-7)
+    p.add_argument("--tolerance", type=float, default=None, help="BP1-QD's (default: the builder's)")
     p.add_argument("--report-only", action="store_true")
     p.add_argument("--force", action="store_true")
     p.add_argument("--ensemble", default=None, help="the store of `cracklab sweep studies/cycles/ensemble.toml`, "
@@ -560,6 +590,8 @@ def main(argv=None) -> int:
         res["uguca"] = json.loads((out / "uguca_bp1.json").read_text())
     elif Path(args.page).exists():      # uguca's runs are not in OUT: their section as the page has it
         res["uguca_kept"] = kept_section(Path(args.page).read_text(), "## Against uguca")
+    if (out / "qd_tolerance.json").exists():    # python -m studies.cycles.tolerance
+        res["qd_tolerance"] = json.loads((out / "qd_tolerance.json").read_text())
     if (out / "fd_checks.json").exists():       # python -m studies.cycles.fd_checks
         res["fd_checks"] = json.loads((out / "fd_checks.json").read_text())
     cost = out / f"cost_dz{args.dz[-1]:g}.json"

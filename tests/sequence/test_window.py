@@ -76,7 +76,7 @@ def test_bp1_on_the_window_gives_the_run_on_the_whole_grid(monkeypatch):
     from cracklab.analysis import events
     from cracklab.scenes import bp1
 
-    scene = bp1(dz=200.0, years=210.0, depth=160e3)
+    scene = bp1(dz=200.0, years=210.0, depth=160e3, tolerance=1e-7)
     on = simulate(scene)
 
     class Whole(qd.WindowedStatic):
@@ -134,3 +134,26 @@ def test_a_state_of_a_run_on_the_whole_grid_resumes_on_the_window(monkeypatch):
     assert got.n == ahead.n and abs(got.t - ahead.t) <= 1e-8 * ahead.t      # the step control: round-off in dt
     for a, b in ((got.delta[3], ahead.delta[3]), (got.psi, ahead.psi), (got.V, ahead.V), (got.tau[3], ahead.tau[3])):
         assert np.max(np.abs(a - b)) <= 1e-7 * np.max(np.abs(b))
+
+
+def test_fields_at_a_few_nodes_are_the_fields_over_the_grid():
+    """A sequence state's fields read at nodes on the window and in the creeping region
+    (``SequenceState.at``, what the stations take) are those of the fields over the grid."""
+    import itertools
+
+    from cracklab.scenes import bp1
+    from cracklab.solver.sequence.run import SequenceRun
+
+    run = SequenceRun(bp1(dz=200.0, years=50.0, depth=160e3))
+    assert run.system.window is not None
+    states = list(itertools.islice(run, 40))
+    off = np.setdiff1d(np.arange(1600), run.system.points)[[0, 1, 400, -1]]     # where the plane creeps
+    nodes = np.sort(np.concatenate([run.system.points[[0, 5, 100, -1]], off])).astype(np.int64)
+    for state in (states[1], states[-1]):
+        for name in ("delta_3", "v_3", "tau_3", "psi", "V"):
+            kind, _, c = name.partition("_")
+            lazy = state.at(name, nodes)
+            x = getattr(state, kind)
+            full = (x[int(c)] if c else x).ravel()[nodes]
+            assert np.array_equal(lazy, full), name
+    assert states[-1].at("delta_3", off[:1])[0] == 1e-9 * states[-1].t          # the plate's slip where it creeps

@@ -149,36 +149,44 @@ class QuasiDynamic:
         return {c: x.ravel() for c, x in F.items()}
 
     def fields(self, t, y, last):
-        """(delta, v, tau_of, psi, V) over the grid at (t, y), ``last`` the evaluation there:
-        {component: field} for delta and v, fields for psi and V, and ``tau_of(nodes=None)``
-        giving {component: tau} over the grid, or at the flat indices ``nodes`` of the grid
-        (computed when asked: on a window the creeping region's needs the grid's transforms)."""
+        """(grid_of, at_of) at (t, y), ``last`` the evaluation there: ``grid_of(name)`` the
+        field ``name`` over the grid ({component: field} for "delta", "v", "tau"; a field for
+        "psi" and "V"), ``at_of(name, nodes)`` the field ("delta_3", "psi", ...) at the flat
+        indices ``nodes`` of the grid. On a window each is computed when asked: the creeping
+        region's values are the plate's, its tau needs the grid's transforms."""
         V, tau, v = last
         delta, psi = self.split(y)
         shape = self.grid.shape
+        flat = {"delta": delta, "v": v, "tau": tau, "psi": psi, "V": V}
+
+        def values(name):
+            kind, _, c = name.partition("_")
+            return flat[kind][int(c)] if c else flat[kind]
         if self.window is None:
-            grid = [{c: x[c].reshape(shape) for c in self.comps} for x in (delta, v, tau)]
-
-            def tau_all(nodes=None):
-                return grid[2] if nodes is None else {c: tau[c][nodes] for c in self.comps}
-            return grid[0], grid[1], tau_all, psi.reshape(shape), V.reshape(shape)
+            def grid_of(name):
+                x = flat[name]
+                return {c: a.reshape(shape) for c, a in x.items()} if isinstance(x, dict) else x.reshape(shape)
+            return grid_of, lambda name, nodes: values(name)[nodes]
         pts, N = self.points, int(np.prod(shape))
+        outside = {"delta": lambda c: self.plate[c] * t, "v": lambda c: self.plate[c], "psi": lambda c: 0.0,
+                   "V": lambda c: self.plate_speed}
 
-        def spread(values, outside):
-            out = np.full(N, outside)
-            out[pts] = values
+        def spread(name):
+            kind, _, c = name.partition("_")
+            out = np.full(N, outside[kind](int(c) if c else None))
+            out[pts] = values(name)
             return out.reshape(shape)
 
-        d = {c: spread(delta[c], self.plate[c] * t) for c in self.comps}
-        vg = {c: spread(v[c], self.plate[c]) for c in self.comps}
+        def grid_of(name):
+            if name == "tau":
+                return tau_grid()
+            if name in ("delta", "v"):
+                return {c: spread(f"{name}_{c}") for c in self.comps}
+            return spread(name)
 
-        def tau_window(nodes=None):
-            if nodes is not None:
-                at = np.searchsorted(pts, nodes)
-                if np.array_equal(pts[np.minimum(at, pts.size - 1)], nodes):    # the nodes are on the window
-                    return {c: tau[c][at] for c in self.comps}
-                return {c: x.ravel()[nodes] for c, x in tau_window().items()}
-            F = self.static.traction(d)
+        def tau_grid():
+            F = self.static.traction(grid_of("delta"))
+            vg = grid_of("v")
             out = {}
             for c in self.comps:
                 x = (self._tau0_grid[c].reshape(shape) + F[c] + self.stiffness * self.plate[c] * t).ravel()
@@ -188,7 +196,15 @@ class QuasiDynamic:
                 x[pts] = tau[c]
                 out[c] = x.reshape(shape)
             return out
-        return d, vg, tau_window, spread(psi, 0.0), spread(V, self.plate_speed)
+
+        def at_of(name, nodes):
+            at = np.minimum(np.searchsorted(pts, nodes), pts.size - 1)
+            on = pts[at] == nodes
+            if name.startswith("tau_") and not np.all(on):        # the creeping region's tau: the grid's
+                return grid_of("tau")[int(name[4:])].ravel()[nodes]
+            kind, _, c = name.partition("_")
+            return np.where(on, values(name)[at], outside.get(kind, lambda c: np.nan)(int(c) if c else None))
+        return grid_of, at_of
 
     def stage(self, dt, rates) -> None:
         """Before a stage ``dt`` into a step, the previous stage's rates ``rates``: nothing for

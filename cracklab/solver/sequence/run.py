@@ -21,26 +21,43 @@ from .quasi_dynamic import QuasiDynamic
 class SequenceState:
     """After accepted step ``n`` (time ``t``, reached by a step ``dt``): the fields over the
     grid, {component: array} for ``delta``, ``v``, ``tau``; ``psi`` and the slip rate
-    magnitude ``V``. ``tau`` is computed when first asked (``tau_of``)."""
+    magnitude ``V``, each computed when first asked (``grid_of``: name -> field, from the
+    system's ``fields``); :meth:`at` reads a field at a few nodes without it (``at_of``)."""
 
     n: int
     t: float
     dt: float
-    delta: dict
-    v: dict
-    tau_of: Callable = field(repr=False)
-    psi: np.ndarray
-    V: np.ndarray
+    grid_of: Callable = field(repr=False)
+    at_of: Callable = field(repr=False)
+
+    @cached_property
+    def delta(self) -> dict:
+        return self.grid_of("delta")
+
+    @cached_property
+    def v(self) -> dict:
+        return self.grid_of("v")
 
     @cached_property
     def tau(self) -> dict:
-        return self.tau_of()
+        return self.grid_of("tau")
 
-    def tau_at(self, nodes) -> dict:
-        """{component: tau at the flat indices ``nodes`` of the grid}."""
-        if "tau" in self.__dict__:
-            return {c: x.ravel()[nodes] for c, x in self.tau.items()}
-        return self.tau_of(np.asarray(nodes, dtype=np.int64))
+    @cached_property
+    def psi(self) -> np.ndarray:
+        return self.grid_of("psi")
+
+    @cached_property
+    def V(self) -> np.ndarray:
+        return self.grid_of("V")
+
+    def at(self, name: str, nodes) -> np.ndarray:
+        """The field ``name`` ("delta_3", "v_1", "tau_3", "psi" or "V") at the flat indices
+        ``nodes`` (an int64 array) of the grid."""
+        kind, _, c = name.partition("_")
+        if kind in self.__dict__:           # the field over the grid is there already
+            x = self.__dict__[kind]
+            return (x[int(c)] if c else x).ravel()[nodes]
+        return self.at_of(name, nodes)
 
 
 def system_of(scene, transforms=None) -> QuasiDynamic:
@@ -117,8 +134,7 @@ class SequenceRun:
         sysm = self.system
         if sysm.last is None:
             sysm.rates(self.t, self.y)
-        delta, v, tau_of, psi, V = sysm.fields(self.t, self.y, sysm.last)
-        return SequenceState(self.n, self.t, dt, delta, v, tau_of, psi, V)
+        return SequenceState(self.n, self.t, dt, *sysm.fields(self.t, self.y, sysm.last))
 
     def __iter__(self):
         if self.n == 0:
