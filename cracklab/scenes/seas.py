@@ -188,7 +188,7 @@ def bp5(*, dx=1000.0, years=1800.0, dynamic=False, record=None, numerics=None, t
     default (docs/reference/scenes.md states the cost per step and the grid that runs in
     an hour here). ``dynamic``: BP5-FD (the fully dynamic response, its history exact at a
     variable step). ``tolerance``: the step's relative error (None: 1e-7 quasi-dynamic,
-    1e-5 dynamic, as ``bp1``)."""
+    1e-5 dynamic; tighter than ``bp1``'s, whose defaults were set by BP1's tolerance study)."""
     p = BP5
     years = check_positive("years", years)
     tolerance = (1e-5 if dynamic else 1e-7) if tolerance is None else tolerance
