@@ -9,7 +9,7 @@ static response, the rate-and-state solve at the sliding points, the rest (glue)
 step's own arithmetic (the pair's stage sums, its error estimate and norm). Then the
 floor of a run of ``--steps`` accepted steps (the count of the study's run at that dz)
 if the glue and the step's own arithmetic cost nothing; and the steps in BP1-QD's first
-event at 200 m for three tolerances (whether the pair's accuracy or its stability sets
+event at 200 m for four tolerances (whether the pair's accuracy or its stability sets
 the steps of a rupture)."""
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def _step(scene, system, y, repeats):
     return sums + norm
 
 
-def event_steps(dz=200.0, tolerances=(1e-6, 1e-7, 1e-8), depth=80e3, years=230.0) -> dict:
+def event_steps(dz=200.0, tolerances=(1e-4, 1e-5, 1e-6, 1e-7), depth=80e3, years=230.0) -> dict:
     """{tolerance: accepted steps in events} of BP1-QD's first event (at ``dz``, the creeping
     region to ``depth``): how the pair's steps in a rupture grow with its tolerance."""
     from cracklab import Record, simulate
