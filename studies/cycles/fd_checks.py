@@ -23,34 +23,48 @@ CASES = {"beta 0.25": {"beta": 0.25, "tolerance": None}, "tolerance 1e-5": {"bet
 
 
 def run_case(out, dz, years, beta, tolerance) -> dict:
-    from cracklab import analysis, simulate
     from cracklab.scenes import bp1
 
     scene = bp1(dz=dz, years=years, dynamic=True, tolerance=tolerance).replace(beta=beta)
+    tol = scene.sequence.tolerance
+    return {"dz": dz, "beta": beta, "tolerance": tol, "years": years,
+            **catalogue(scene, Path(out) / f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{tol:g}.zarr")}
+
+
+def catalogue(scene, store) -> dict:
+    """Run ``scene`` into ``store`` (resuming a killed run): {wall_s, accepted_steps,
+    t_start_s, peak_slip_rate} of its events."""
+    from cracklab import analysis, simulate
+
     t0 = time.time()
-    ds = simulate(scene, store=str(Path(out) / f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{scene.sequence.tolerance:g}.zarr"),
-                  resume=True)
+    ds = simulate(scene, store=str(store), resume=True)
     wall = time.time() - t0
     ev = analysis.events(ds)
-    return {"dz": dz, "beta": beta, "tolerance": scene.sequence.tolerance, "years": years, "wall_s": wall,
-            "accepted_steps": int(ds.attrs["accepted_steps"]), "t_start_s": ev.t_start.values.tolist(),
+    return {"wall_s": wall, "accepted_steps": int(ds.attrs["accepted_steps"]), "t_start_s": ev.t_start.values.tolist(),
             "peak_slip_rate": ev.peak_slip_rate.values.tolist()}
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def run_all(argv, doc, dz, years, cases, run, name) -> int:
+    """The command line of a check (``doc``: its module docstring): each of ``cases``
+    ({label: keyword arguments of ``run``}) at --dz, --years into OUT/``name``."""
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
     p.add_argument("-o", "--out", default="out/cycles")
-    p.add_argument("--dz", type=float, default=50.0)
-    p.add_argument("--years", type=float, default=430.0)
+    p.add_argument("--dz", type=float, default=dz)
+    p.add_argument("--years", type=float, default=years)
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     res = {}
-    for name, case in CASES.items():
-        res[name] = run_case(out, args.dz, args.years, **case)
-        print(f"{name}: {res[name]['wall_s']:.0f} s, events at {res[name]['t_start_s']} s", flush=True)
-    (out / "fd_checks.json").write_text(json.dumps(res, indent=1))
+    for label, case in cases.items():
+        res[label] = run(out, args.dz, args.years, **case)
+        print(f"{label}: {res[label]['wall_s']:.0f} s, {res[label]['accepted_steps']} steps, events at "
+              f"{res[label]['t_start_s']} s", flush=True)
+    (out / name).write_text(json.dumps(res, indent=1))
     return 0
+
+
+def main(argv=None) -> int:
+    return run_all(argv, __doc__, 50.0, 430.0, CASES, run_case, "fd_checks.json")
 
 
 if __name__ == "__main__":
