@@ -29,6 +29,13 @@ of length r h or r h - T0 and, kept to the next step, that step's older piece; e
 piece starts at the end of the one before (e^{lam_p x} by products), and 1 / lam_p is
 computed once, so the walk computes e^{lam_p L} only for the pieces no step has.
 
+A mode whose every term decays below e^-NEGLIGIBLE over a step (r h times the slowest
+term's rate >= NEGLIGIBLE: the slow phases of a sequence, kernel III) takes it in closed
+form: its window is the step's own piece and its old states and older pieces contribute
+nothing, so I(t + h) = (the near kernel's weight + sum_p 2 Re c_p e^{lam_p T0} (...) / r) V(t)
++ the same for V(t + h); its states are left as that closed form (``lazy``) and written
+out only when a shorter step, or a checkpoint, needs them.
+
 A step is taken in two calls: :meth:`VariableHistory.prepare` (h, with the step's start
 value already pushed) gives I(t + h) = A + B V(t + h) for every mode, linear in the
 unknown end value (the interface law then finds V(t + h)); :meth:`commit` (V(t + h)) pushes
@@ -68,7 +75,7 @@ def memory(kernel, nu, r, h_floor, *, T0=T0_VARIABLE, tol=None) -> int:
     states, the step's prepared states and the weights of a run of steps of ``h_floor``."""
     cap = _capacity(r, T0, h_floor)
     P = get_fit(kernel, nu, "velocity", T0=T0, tol=tol).lam.size
-    return int(cap.sum() * 24 + (cap.max() + 1) * 8 + np.size(r) * (12 * P * 16 + 8 + 24 + 32))
+    return int(cap.sum() * 24 + (cap.max() + 1) * 8 + np.size(r) * (12 * P * 16 + 8 + 24 + 32 + 2))
 
 
 class NearTable:
@@ -145,6 +152,12 @@ class VariableHistory:
         self._g = np.zeros((M, P), dtype=complex)
         self._glast = np.zeros((M, P), dtype=complex)
         self._glast_n = -1
+        # modes whose every term decayed below e^-NEGLIGIBLE over their last step (``lazy``):
+        # their states are the closed form of that step's piece, written out only when a
+        # shorter step needs them (``_collapse``: the modes that collapse in the step prepared)
+        self.decay = float(np.min(-self.lam.real))
+        self.lazy = np.zeros(M, dtype=np.uint8)
+        self._collapse = np.zeros(M, dtype=np.uint8)
         self.last_h, self.run = None, 0     # the last step committed, and how many in a row were it
         self._cache = None                  # the weights of a run of equal steps (h, arrays)
 
@@ -170,6 +183,7 @@ class VariableHistory:
         _prepare(self.r, self.lam, self.coef, self.near.p0, self.near.p00, self.near.half, self.T0,
                  self.ring, self.off, self.cap, self.hring, self.hcap, self.first, self.n, h,
                  self.SR, self.SI, A, B, kR, kI, sB, self._g, self._glast, self._glast_n == self.n,
+                 self.lazy, self._collapse, self.decay if self.COLLAPSE else 0.0,
                  cache is not None, self.run, *(cache or self._NONE))
         self._prep = (h, kR, kI, sB)
         return A, B
@@ -178,6 +192,8 @@ class VariableHistory:
              np.zeros((1, 4, 1), complex), np.zeros((1, 1), complex))
     #: equal steps in a row before their weights are computed once and reused
     UNIFORM_AFTER = 8
+    #: whether a mode whose terms all decay over a step takes it in closed form
+    COLLAPSE = True
 
     def _uniform(self, h):
         """The weights of a window of steps all ``h`` long (cL, cw, cwo, ce0, cs, cg), when the
@@ -201,7 +217,7 @@ class VariableHistory:
             raise RuntimeError("prepare(h) first")
         h, kR, kI, sB = self._prep
         V = np.ascontiguousarray(V, dtype=complex)
-        _advance(kR, kI, sB, V, self.SR, self.SI)
+        _advance(kR, kI, sB, V, self.SR, self.SI, self._collapse, self.lazy)
         self._g, self._glast = self._glast, self._g       # the step's e^{lam r h}: the newest piece's from here
         self._glast_n = self.n + 1
         self.hring[self.n % self.hcap] = h
@@ -216,6 +232,8 @@ class VariableHistory:
                                   f"its ring: too many steps shorter than the floor {self.h_floor:g}")
 
     def get_state(self) -> dict:
+        _write_out(self.r, self.lam, self.T0, self.ring, self.off, self.cap, self.hring, self.hcap, self.n,
+                   self.SR, self.SI, self.lazy)          # the states as the run's before this one held them
         return {"ring": self.ring.copy(), "hring": self.hring.copy(), "first": self.first.copy(), "n": self.n,
                 "started": self.started, "SR": self.SR.copy(), "SI": self.SI.copy(),
                 "last_h": self.last_h, "run": self.run,
@@ -233,6 +251,7 @@ class VariableHistory:
         g = state.get("g_last")         # None (or absent: a state written before it was kept): computed again
         self._glast = np.zeros_like(self.SR) if g is None else np.array(g, dtype=complex)
         self._glast_n = -1 if g is None else self.n
+        self.lazy[:] = 0
         self._prep = None
 
 
@@ -273,10 +292,14 @@ def _phi(z):
 
 
 @njit()
-def _advance(kR, kI, sB, V, SR, SI):
-    """The states at the step's end, in place: S = k + sB V (Re V into SR, Im V into SI)."""
+def _advance(kR, kI, sB, V, SR, SI, collapse, lazy):
+    """The states at the step's end, in place: S = k + sB V (Re V into SR, Im V into SI);
+    a mode that collapsed in the step is left lazy (its state the closed form of the step)."""
     M, P = SR.shape
     for k in range(M):
+        if collapse[k]:
+            lazy[k] = 1
+            continue
         vr = V[k].real
         vi = V[k].imag
         for p in range(P):
@@ -366,10 +389,52 @@ def _slab_chain(lam, il, il2, ex, known, x, L, d, ca, cb, rk, ea, eb):
 
 
 @njit()
+def _decayed_weights(lam, elo, T0, rk, d, ea, eb):
+    """ea_p, eb_p of a piece d = r h long whose every term decayed below e^-NEGLIGIBLE over
+    it (``_slab_chain``'s negligible branch on its part (T0, d) alone)."""
+    ca = T0 / d
+    cb = (d - T0) / d
+    for p in range(lam.size):
+        il = 1.0 / lam[p]
+        il2 = il * il
+        ea[p] = elo[p] / rk * (-ca * il + il2 / d)
+        eb[p] = elo[p] / rk * (-cb * il - il2 / d)
+
+
+@njit()
+def _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb):
+    """Write out the state of lazy mode k: the closed form of its last step's piece."""
+    rk = r[k]
+    ck = cap[k]
+    _decayed_weights(lam, elo, T0, rk, rk * hring[(n - 1) % hcap], ea, eb)
+    Va = ring[off[k] + (n - 1) % ck]
+    Vb = ring[off[k] + n % ck]
+    for p in range(lam.size):
+        SR[k, p] = ea[p] * Va.real + eb[p] * Vb.real
+        SI[k, p] = ea[p] * Va.imag + eb[p] * Vb.imag
+
+
+@njit()
+def _write_out(r, lam, T0, ring, off, cap, hring, hcap, n, SR, SI, lazy):
+    """Write out the states of every lazy mode."""
+    elo = np.exp(lam * T0)
+    ea = np.empty(lam.size, dtype=np.complex128)
+    eb = np.empty(lam.size, dtype=np.complex128)
+    for k in range(r.size):
+        if lazy[k]:
+            _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
+            lazy[k] = 0
+
+
+@njit()
 def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first, n, h, SR, SI, A, B, kR, kI, sB,
-             gh, glast, last_ok, cached, run, cL, cw, cwo, ce0, cs, cg):
+             gh, glast, last_ok, lazy, collapse, decay, cached, run, cL, cw, cwo, ce0, cs, cg):
     """I(t + h) = A + B V(t + h) per mode (module docstring); ``gh`` gets e^{lam_p r h} of
-    this step, ``glast`` holds that of the step before when ``last_ok``."""
+    this step, ``glast`` holds that of the step before when ``last_ok``. A mode whose every
+    term decays below e^-NEGLIGIBLE over the step (r h ``decay`` >= NEGLIGIBLE, ``decay``
+    the slowest term's rate; 0: never) takes it in closed form, marked in ``collapse``: its
+    window is the step's own piece, its old states and older pieces contribute nothing.
+    A ``lazy`` mode's state (module docstring) is written out before a step that needs it."""
     M = r.size
     P = lam.size
     elo = np.exp(lam * T0)
@@ -383,12 +448,32 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
     none = np.empty(0, dtype=np.complex128)
     P0_0, P00_0 = _p(p0, p00, half, 0.0)       # at the window's ends, the same for every mode
     P0_T, P00_T = _p(p0, p00, half, T0)
+    # the closed form of a collapsed mode: the tail's sums over the terms of its weights
+    S1 = 0.0
+    S2 = 0.0
+    for p in range(P):
+        S1 += 2.0 * (coef[p] * elo[p] * il[p]).real
+        S2 += 2.0 * (coef[p] * elo[p] * il2[p]).real
     for k in range(M):
         rk = r[k]
         acc = 0.0 + 0.0j
         bk = 0.0
         ck = cap[k]
         base = off[k]
+        if decay > 0.0 and rk * h * decay >= NEGLIGIBLE:
+            collapse[k] = 1
+            d = rk * h
+            wa, wb = _near_w(P0_0, P00_0, P0_T, P00_T, d, 0.0, T0)
+            Va = ring[base + n % ck]
+            A[k] = wa * Va / rk + Va * ((-(T0 / d) * S1 + S2 / d) / rk)
+            B[k] = wb / rk + (-((d - T0) / d) * S1 - S2 / d) / rk
+            continue
+        collapse[k] = 0
+        last_ok_k = last_ok
+        if lazy[k]:
+            _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
+            lazy[k] = 0
+            last_ok_k = False           # its last step's e^{lam r h} were not kept
         if cached and run >= cL[k] - 1 and n - first[k] >= cL[k] - 1:
             # every piece of the window is a step of h: the weights of the last uniform run
             o = cwo[k]
@@ -467,7 +552,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
                         known = gh[k]
                     elif from_lo and j == n:
                         known = eL
-                    elif j == n - 1 and not from_lo and last_ok:
+                    elif j == n - 1 and not from_lo and (to_hi or last_ok_k):
                         known = elo if to_hi else glast[k]
                     else:
                         known = none

@@ -157,3 +157,35 @@ def test_the_exponentials_kept_from_the_last_step_are_the_ones_computed():
             assert np.max(np.abs(B - B2)) <= 1e-12 * np.max(np.abs(B)), (cut, j)
             eng.commit(V[j + 1])
             again.commit(V[j + 1])
+
+
+def test_modes_whose_terms_all_decay_over_a_step_take_it_in_closed_form(monkeypatch):
+    """A mode whose every term decays below e^-50 over a step takes it in closed form and
+    keeps its state as that closed form until a shorter step writes it out: the same
+    convolution and states as the walk's to round-off, through long steps, short ones after
+    them and a state taken between (BP1-FD's slow phases, kernel III)."""
+    r = 2 * np.pi * np.arange(1, 400) / 6.4e5 * 3464.0
+    h = np.concatenate([np.full(10, 0.004), 10.0 ** np.linspace(-2, 7, 30), [3e6, 2e6, 5e6, 1e5, 10.0, 0.3, 0.01],
+                        10.0 ** np.linspace(-2, 6.5, 12), [0.004, 3e6, 0.05]])
+    V = np.exp(1j * np.outer(np.arange(h.size + 1), r) * 1e-3) * (1 + np.arange(h.size + 1))[:, None]
+
+    def run(collapse):
+        monkeypatch.setattr(VariableHistory, "COLLAPSE", collapse)
+        eng = VariableHistory("III", NU, r, 0.004)
+        eng.start(V[0])
+        out, lazy = [], 0
+        for j, hj in enumerate(h):
+            A, B = eng.prepare(hj)
+            out.append(np.concatenate([A, B]))
+            eng.commit(V[j + 1])
+            lazy = max(lazy, int(eng.lazy.sum()))
+            if j == 45:
+                state = eng.get_state()
+        return np.array(out), lazy, state
+
+    fast, lazy, s_fast = run(True)
+    walk, none, s_walk = run(False)
+    assert none == 0 and lazy > 300            # most modes collapse in the long steps
+    assert np.max(np.abs(fast - walk), axis=1).max() <= 1e-13 * np.abs(walk).max()
+    for key in ("SR", "SI"):
+        assert np.max(np.abs(s_fast[key] - s_walk[key])) <= 1e-13 * np.abs(s_walk[key]).max(), key
