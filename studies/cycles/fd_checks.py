@@ -18,6 +18,8 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 CASES = {"beta 0.25": {"beta": 0.25, "tolerance": None}, "tolerance 1e-5": {"beta": 0.5, "tolerance": 1e-5},
          "tolerance 1e-6": {"beta": 0.5, "tolerance": 1e-6}}
 
@@ -32,8 +34,9 @@ def run_case(out, dz, years, beta, tolerance) -> dict:
 
 
 def catalogue(scene, store) -> dict:
-    """Run ``scene`` into ``store`` (resuming a killed run): {wall_s, accepted_steps,
-    t_start_s, peak_slip_rate} of its events."""
+    """Run ``scene`` into ``store`` (resuming a killed run; a finished one is reopened, and
+    ``wall_s`` is then the reopening's): {wall_s, accepted_steps, t_start_s, peak_slip_rate
+    of its events, steps_below_1e-7 (the steps whose largest slip rate is below 1e-7 m/s)}."""
     from cracklab import analysis, simulate
 
     t0 = time.time()
@@ -41,7 +44,9 @@ def catalogue(scene, store) -> dict:
     wall = time.time() - t0
     ev = analysis.events(ds)
     return {"wall_s": wall, "accepted_steps": int(ds.attrs["accepted_steps"]), "t_start_s": ev.t_start.values.tolist(),
-            "peak_slip_rate": ev.peak_slip_rate.values.tolist()}
+            "peak_slip_rate": ev.peak_slip_rate.values.tolist(),
+            "steps_below_1e-7": int(np.sum(ds.max_slip_rate.values < 1e-7)),
+            "wall_s_of_run": float(ds.attrs.get("wall_time_in_events", 0.0) + ds.attrs.get("wall_time_between_events", 0.0))}
 
 
 def run_all(argv, doc, dz, years, cases, run, name) -> int:

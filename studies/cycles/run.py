@@ -137,6 +137,7 @@ def analyse(out, dzs, dynamic=False) -> dict:
             "recurrence_yr": (np.diff(quakes) / YEAR).tolist(),
             "time_in_events_s": float(np.sum(dt[fast])),
             "steps_in_events": int(np.sum(fast)),
+            "steps_below_1e-7": int(np.sum(V < 1e-7)),      # the interseismic steps (the plate rate 1e-9 m/s)
             # the wall time stepping in events and between them (runs recorded since it is counted)
             "wall_in_events_s": ds.attrs.get("wall_time_in_events"),
             "wall_between_events_s": ds.attrs.get("wall_time_between_events"),
@@ -280,7 +281,7 @@ def _fd_section(res):
     lines = ["## BP1-FD: the fully dynamic response", "",
              "The same fault with `dynamic=True`: the elastodynamic history of every mode kept exactly at a "
              "variable step (docs/reference/equations.md, \"Sequences: the dynamic response at a variable step\"), "
-             f"tolerance {next(iter(fd.values()))['tolerance']:g}: a predictor-corrector of order 2 whose step "
+             f"tolerance {_tol(next(iter(fd.values()))['tolerance'])}: a predictor-corrector of order 2 whose step "
              "never goes below the dynamic step "
              "beta dz / c_s = 0.5 dz / c_s, and Dormand-Prince 5(4) on the same system while the largest slip rate "
              "is below `sequence.slow_rate` (1.1e-4 m/s here).", "",
@@ -374,10 +375,16 @@ def _fd_convergence(fd, keys, checks) -> list:
                              + ", ".join(f"{x - y:+.3f}" for x, y in zip(t[:m], ref[:m])) + " years")
             r0 = next(iter(checks.values()))
             lines += [f"Not the time step: at dz = {r0['dz']:g} m to {r0['years']:g} years, against the run above "
-                      f"(beta 0.5, tolerance {base['tolerance']:g}), the first earthquakes move " + "; ".join(parts)
+                      f"(beta 0.5, tolerance {_tol(base['tolerance'])}), the first earthquakes move " + "; ".join(parts)
                       + " (`python -m studies.cycles.fd_checks`), a small fraction of the difference between the "
                       "grids at those earthquakes.", ""]
     return lines
+
+
+def _tol(x) -> str:
+    """A tolerance as the pages write it: 1e-5, 2.5e-7."""
+    m, e = f"{float(x):.1e}".split("e")
+    return f"{m.rstrip('0').rstrip('.')}e{int(e)}"
 
 
 def _tolerance_section(checks, base, grid_yr) -> list:
@@ -392,16 +399,18 @@ def _tolerance_section(checks, base, grid_yr) -> list:
     ref = base["events"]
     rows = ["### The step's tolerance", "",
             f"BP1-QD at dz = {first['dz']:g} m over {first['years']:g} years at tighter tolerances than the "
-            f"builder's {base['tolerance']:g} (`python -m studies.cycles.tolerance`): the largest change of an "
+            f"builder's {_tol(base['tolerance'])} (`python -m studies.cycles.tolerance`): the largest change of an "
             "event's start and of a peak slip rate against the run above, and the steps taken.", "",
-            "| tolerance | accepted steps | wall time | largest change of an event's start | of a peak slip rate |",
-            "|---|---|---|---|---|",
-            f"| {base['tolerance']:g} (the run above) | {base['accepted_steps']} | {base['wall_s']:.0f} s | - | - |"]
+            "| tolerance | accepted steps | steps below 1e-7 m/s | wall time | largest change of an event's start | "
+            "of a peak slip rate |", "|---|---|---|---|---|---|",
+            f"| {_tol(base['tolerance'])} (the run above) | {base['accepted_steps']} | {base['steps_below_1e-7']} | "
+            f"{base['wall_s']:.0f} s | - | - |"]
     for tol, r in checks.items():
         m = min(len(r["t_start_s"]), len(ref["t_start"]))
         dt = max(abs(a - b) for a, b in zip(r["t_start_s"][:m], ref["t_start"][:m])) / YEAR
         dp = max(abs(a / b - 1) for a, b in zip(r["peak_slip_rate"][:m], ref["peak_slip_rate"][:m]))
-        rows.append(f"| {tol} | {r['accepted_steps']} | {r['wall_s']:.0f} s | {dt:.2g} years | {dp:.2g} |")
+        rows.append(f"| {_tol(r['tolerance'])} | {r['accepted_steps']} | {r.get('steps_below_1e-7', '-')} | "
+                    f"{r['wall_s']:.0f} s | {dt:.2g} years | {dp:.2g} |")
     rows += ["", f"Against the grid's {grid_yr:.3f} years between the two spacings, the tolerance's share is "
              "negligible: the builder's tolerance buys the steps without moving the results.", ""]
     return rows
@@ -432,20 +441,22 @@ def _cost_section(res, dzs):
             f"six and {ms['step_own_s']:.3f} ms of its own (stage sums, error estimate and norm): {ms['step_s']:.2f} "
             f"ms (`python -m studies.cycles.cost --dz {cost['dz']:g}`, best of 200 on the shared host). The run took "
             f"{steps} accepted steps, {r['steps_in_events']} of them in events: with nothing but the transforms and "
-            f"the solves it would take {floor:.0f} s"
-            + ("" if met else f", so a minute needs about {floor / 60:.1f} times fewer steps or evaluations as well as "
-               "a step with no other cost")
-            + ". The steps in events are set by the pair's accuracy, not by its stability (the "
-            f"first event at {fe['dz']:g} m, creeping region to {fe['depth'] / 1e3:g} km, takes "
-            + ", ".join(f"{n} steps at tolerance {tol}" for tol, n in fe["steps_in_events"].items())
-            + ": about 10^(1/5) more per decade, the order of the pair), so an implicit step would buy nothing; "
-            f"the builder's tolerance, {r['tolerance']:g}, is the loosest the table under \"The step's tolerance\" "
-            "shows to leave the events where tighter ones put them. What is left is the evaluation itself: the "
-            "solve is about 35 ns a point, its transcendental functions called one at a time (numba from pip has "
-            "no vectorised maths library), and the transforms of twice the window; a minute at this count of "
-            "steps needs each step about "
-            f"{r['wall_s'] / 60:.1f} times cheaper, or a pair of higher order taking that many fewer evaluations "
-            "for the same accuracy (its steps grow as the tolerance to the power 1/order).", ""]
+            f"the solves it would take {floor:.0f} s; the rest of the {r['wall_s']:.0f} s is the step's own "
+            "arithmetic, the glue and the record. The steps in events are set by the pair's accuracy, not by its "
+            f"stability (the first event at {fe['dz']:g} m, creeping region to {fe['depth'] / 1e3:g} km, takes "
+            + ", ".join(f"{n} steps at tolerance {_tol(tol)}" for tol, n in fe["steps_in_events"].items())
+            + ": about 10^(1/5) more per decade, the order of the pair), so an implicit step would buy nothing "
+            f"there; the builder's tolerance, {_tol(r['tolerance'])}, leaves the events where tighter ones put them "
+            "(the table under \"The step's tolerance\"). Between events it is the other way: the "
+            f"{r['steps_below_1e-7']} steps with every slip rate below 1e-7 m/s are as many at any tolerance "
+            "(the table's runs), the stability of the explicit pair on the stiff creeping modes sets them, and a "
+            "stiffly stable step (implicit, or an explicit one with a long stability interval) would take fewer. "
+            + ("" if met else
+               f"A minute at this count of steps needs each step about {r['wall_s'] / 60:.1f} times cheaper: the "
+               "solve is about 35 ns a point, its transcendental functions called one at a time (numba from pip has "
+               "no vectorised maths library), the transforms are of twice the window, and the step's own arithmetic "
+               "and the record are of the same order; or a pair of higher order taking that many fewer evaluations "
+               "for the same accuracy (its steps grow as the tolerance to the power 1/order)."), ""]
 
 
 def write_page(res, dzs, page, figs, command):
@@ -458,7 +469,7 @@ def write_page(res, dzs, page, figs, command):
              "transition to velocity strengthening over 3 km, friction to 40 km and creep at the plate rate "
              "1e-9 m/s below. `cracklab.scenes.bp1` builds it (the free surface as a mirror, the creeping region "
              "to 320 km); the response is quasi-dynamic (the static kernel plus radiation damping), the time step "
-             f"adaptive (Dormand-Prince 5(4), tolerance {runs[f'{dzs[0]:g}']['tolerance']:g}). An event lasts while "
+             f"adaptive (Dormand-Prince 5(4), tolerance {_tol(runs[f'{dzs[0]:g}']['tolerance'])}). An event lasts while "
              "the largest slip rate exceeds "
              "1 mm/s.", "",
              "## Cost", "",
