@@ -389,27 +389,26 @@ def _slab_chain(lam, il, il2, ex, known, x, L, d, ca, cb, rk, ea, eb):
 
 
 @njit()
-def _decayed_weights(lam, elo, T0, rk, d, ea, eb):
+def _decayed_weights(il, il2, elo, T0, rk, d, ea, eb):
     """ea_p, eb_p of a piece d = r h long whose every term decayed below e^-NEGLIGIBLE over
-    it (``_slab_chain``'s negligible branch on its part (T0, d) alone)."""
+    it (``_slab_chain``'s negligible branch on its part (T0, d) alone); 1 / lam_p and
+    1 / lam_p^2 come as ``il``, ``il2``."""
     ca = T0 / d
     cb = (d - T0) / d
-    for p in range(lam.size):
-        il = 1.0 / lam[p]
-        il2 = il * il
-        ea[p] = elo[p] / rk * (-ca * il + il2 / d)
-        eb[p] = elo[p] / rk * (-cb * il - il2 / d)
+    for p in range(il.size):
+        ea[p] = elo[p] / rk * (-ca * il[p] + il2[p] / d)
+        eb[p] = elo[p] / rk * (-cb * il[p] - il2[p] / d)
 
 
 @njit()
-def _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb):
+def _write_out_one(k, r, il, il2, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb):
     """Write out the state of lazy mode k: the closed form of its last step's piece."""
     rk = r[k]
     ck = cap[k]
-    _decayed_weights(lam, elo, T0, rk, rk * hring[(n - 1) % hcap], ea, eb)
+    _decayed_weights(il, il2, elo, T0, rk, rk * hring[(n - 1) % hcap], ea, eb)
     Va = ring[off[k] + (n - 1) % ck]
     Vb = ring[off[k] + n % ck]
-    for p in range(lam.size):
+    for p in range(il.size):
         SR[k, p] = ea[p] * Va.real + eb[p] * Vb.real
         SI[k, p] = ea[p] * Va.imag + eb[p] * Vb.imag
 
@@ -418,11 +417,13 @@ def _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, e
 def _write_out(r, lam, T0, ring, off, cap, hring, hcap, n, SR, SI, lazy):
     """Write out the states of every lazy mode."""
     elo = np.exp(lam * T0)
+    il = 1.0 / lam
+    il2 = il * il
     ea = np.empty(lam.size, dtype=np.complex128)
     eb = np.empty(lam.size, dtype=np.complex128)
     for k in range(r.size):
         if lazy[k]:
-            _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
+            _write_out_one(k, r, il, il2, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
             lazy[k] = 0
 
 
@@ -471,7 +472,7 @@ def _prepare(r, lam, coef, p0, p00, half, T0, ring, off, cap, hring, hcap, first
         collapse[k] = 0
         last_ok_k = last_ok
         if lazy[k]:
-            _write_out_one(k, r, lam, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
+            _write_out_one(k, r, il, il2, elo, T0, ring, off, cap, hring, hcap, n, SR, SI, ea, eb)
             lazy[k] = 0
             last_ok_k = False           # its last step's e^{lam r h} were not kept
         if cached and run >= cL[k] - 1 and n - first[k] >= cL[k] - 1:

@@ -104,6 +104,7 @@ class QuasiDynamic:
         self._solve_of = every if self._half is None else self._both.astype(np.int64)
         self._image_at = np.zeros(0, np.int64) if self.image is None else self.image.astype(np.int64)
         self._sigma_solved = self.sigma_s if self._half is None else self._sigma_half
+        self._kept_places = None
         self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -198,13 +199,24 @@ class QuasiDynamic:
             return out
 
         def at_of(name, nodes):
-            at = np.minimum(np.searchsorted(pts, nodes), pts.size - 1)
-            on = pts[at] == nodes
+            at, on = self._places(nodes)
             if name.startswith("tau_") and not np.all(on):        # the creeping region's tau: the grid's
                 return grid_of("tau")[int(name[4:])].ravel()[nodes]
             kind, _, c = name.partition("_")
             return np.where(on, values(name)[at], outside.get(kind, lambda c: np.nan)(int(c) if c else None))
         return grid_of, at_of
+
+    def _places(self, nodes):
+        """(the place among the window's points of each of the flat grid indices ``nodes``,
+        whether it is one of them), kept for the last array asked (a recorder's stations)."""
+        kept = self._kept_places
+        if kept is not None and kept[0] is nodes:
+            return kept[1], kept[2]
+        pts = self.points
+        at = np.minimum(np.searchsorted(pts, nodes), pts.size - 1)
+        on = pts[at] == nodes
+        self._kept_places = (nodes, at, on)
+        return at, on
 
     def stage(self, dt, rates) -> None:
         """Before a stage ``dt`` into a step, the previous stage's rates ``rates``: nothing for
