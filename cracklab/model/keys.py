@@ -132,7 +132,7 @@ SECTION_KEYS = {
         "dt_first": Key("time", f"{SCALE}; in [dt_min, dt_max]", "first step tried (absent: dx / cs)", (0.0,)),
         "pair": Key("-", _choices(PAIRS), "embedded Runge-Kutta pair (orders 5 and 3)", ("euler",)),
         "slow_rate": Key("velocity", f">= 0, in {SCALE_RANGE} or 0", "dynamic response: the pair steps while the "
-                         "largest slip rate is below this (absent: 1e-3 of the least sigma a / eta; 0: never)",
+                         "largest slip rate is below this (absent: 0.1 of the least sigma a / eta; 0: never)",
                          (-1.0,)),
         "event_threshold": Key("velocity", SCALE, "an event lasts while the largest slip rate exceeds this", (0.0,)),
         "slow_interval": Key("time", SCALE, "fields recorded this often between events (absent: t_end / 100)", (0.0,)),

@@ -34,9 +34,9 @@ class Sequence:
       quasi-dynamic response ("dormand_prince", order 5; "bogacki_shampine", order 3). The
       dynamic response steps by a predictor-corrector (order 2) and takes a step of dt_min
       whatever its error: that is the fixed-step ruptures' step; while its largest slip
-      rate is below ``slow_rate`` (velocity, >= 0; None: 1e-3 of the least sigma a / eta
-      over the fault, where the radiation damping is negligible; 0: never) it steps by
-      ``pair`` too.
+      rate is below ``slow_rate`` (velocity, >= 0; None: 0.1 of the least sigma a / eta
+      over the fault, where the radiation damping moves the solved slip rate by a tenth
+      or less of an error in the history's end rate; 0: never) it steps by ``pair`` too.
     * ``mirror``: the plane is even about x1 = 0 (node (i, k) is node (n1 - i, k)): a free
       surface of the plane problem, the grid holding the fault and its image (scenes.bp1).
       The traction is made exactly even before each solve, so that the transforms'

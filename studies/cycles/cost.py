@@ -71,7 +71,7 @@ def _step(scene, system, y, repeats):
     f = system.rates(3.15e7, y)
     k = np.empty((pair.stages, y.size))
     k[0] = f
-    free = SimpleNamespace(rates=lambda t, yi: f, stage=lambda dt, k: None)
+    free = SimpleNamespace(rates=lambda t, yi: f, stage=lambda dt, k, c: None)
     sums = _best(lambda: try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0), repeats)
     y_new, err, _ = try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0)
     norm = _best(lambda: error_norm(system, y_new, err, scene.sequence.tolerance), repeats)

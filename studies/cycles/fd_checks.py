@@ -1,14 +1,16 @@
 """BP1-FD's event times against its time step (docs/studies/cycles.md, "Self-convergence of
 BP1-FD"): the run at dz = 50 m to 430 years (three earthquakes) with the dynamic step
-halved (beta 0.25 instead of 0.5) and with the tolerance ten and a hundred times tighter
-(1e-5 and 1e-6 instead of the builder's 1e-4), to set against the page's run at 50 m:
+halved (beta 0.25 instead of 0.5), with the tolerance ten and a hundred times tighter
+(1e-5 and 1e-6 instead of the builder's 1e-4) and with the pair's slow steps below 1e-3 of
+the least sigma a / eta instead of 1e-1 (Sequence.slow_rate), to set against the page's
+run at 50 m:
 whether the event times' difference between 50 and 25 m comes from the time step or from
 the grid, and what the builder's tolerance costs in accuracy.
 
     python -m studies.cycles.fd_checks [-o OUT] [--dz 50] [--years 430]
 
-writes OUT/fd_checks.json: {case: {dz, beta, tolerance, years, wall_s, accepted_steps,
-t_start_s (the events' starts, s), peak_slip_rate}}.
+writes OUT/fd_checks.json: {case: {dz, beta, tolerance, years, slow_fraction, wall_s,
+accepted_steps, t_start_s (the events' starts, s), peak_slip_rate}}.
 """
 from __future__ import annotations
 
@@ -21,16 +23,27 @@ from pathlib import Path
 import numpy as np
 
 CASES = {"beta 0.25": {"beta": 0.25, "tolerance": None}, "tolerance 1e-5": {"beta": 0.5, "tolerance": 1e-5},
-         "tolerance 1e-6": {"beta": 0.5, "tolerance": 1e-6}}
+         "tolerance 1e-6": {"beta": 0.5, "tolerance": 1e-6},
+         "the pair below 1e-3 sigma a / eta": {"beta": 0.5, "tolerance": None, "slow": 1e-3}}
 
 
-def run_case(out, dz, years, beta, tolerance) -> dict:
+def run_case(out, dz, years, beta, tolerance, slow=None) -> dict:
+    """``slow``: the slow steps' bound as a fraction of the least sigma a / eta (None: the
+    default, dynamic.SLOW_FRACTION)."""
+    import dataclasses
+
     from cracklab.scenes import bp1
+    from cracklab.solver.sequence.run import system_of
 
     scene = bp1(dz=dz, years=years, dynamic=True, tolerance=tolerance).replace(beta=beta)
+    name = f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{scene.sequence.tolerance:g}"
+    if slow is not None:
+        rate = system_of(scene).slow_rate(slow)
+        scene = scene.replace(sequence=dataclasses.replace(scene.sequence, slow_rate=rate))
+        name += f"_slow{slow:g}"
     tol = scene.sequence.tolerance
-    return {"dz": dz, "beta": beta, "tolerance": tol, "years": years,
-            **catalogue(scene, Path(out) / f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{tol:g}.zarr")}
+    return {"dz": dz, "beta": beta, "tolerance": tol, "years": years, "slow_fraction": slow,
+            **catalogue(scene, Path(out) / f"{name}.zarr")}
 
 
 def catalogue(scene, store) -> dict:

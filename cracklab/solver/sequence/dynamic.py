@@ -80,6 +80,11 @@ class DynamicResponse:
         self._AB = self._h = None
 
 
+#: the default slow steps' bound (``FullyDynamic.slow_rate``): the end rate's error moves the
+#: solved slip rate by at most this fraction of it (docs/studies/cycles.md, its effect on BP1-FD)
+SLOW_FRACTION = 0.1
+
+
 class FullyDynamic(QuasiDynamic):
     """The fully dynamic system of the same values as :class:`QuasiDynamic`, at steps no
     shorter than ``h_floor`` (a Scene's dt = beta dx / c_s by default)."""
@@ -105,11 +110,18 @@ class FullyDynamic(QuasiDynamic):
         F = self.response.traction({c: delta[c].reshape(shape) for c in self.comps}, self.v_end)
         return {c: x.ravel() for c, x in F.items()}
 
-    def stage(self, dt, rates) -> None:
-        """Before a stage ``dt`` into a step of a pair: the history prepared for a step of dt,
-        the end's slip rate in its newest piece that of the previous stage's ``rates``."""
+    def stage(self, dt, rates, c) -> None:
+        """Before the stage i ``dt`` = c_i h into a step of a pair, with the rates of the stages
+        before it (``rates``, a row each) and ``c`` = (c_0 .. c_i): the history prepared for a
+        step of dt, the end's slip rate in its newest piece extrapolated to c_i along the line
+        through the last two stages' rates (the last one's alone after one stage, or when
+        the two are at one time)."""
         self.response.prepare(dt)
-        self.v_end = self.rate_fields(rates)
+        f = rates[-1]
+        i = len(c) - 1
+        if i >= 2 and c[i - 1] > c[i - 2] and c[i] != c[i - 1]:
+            f = f + ((c[i] - c[i - 1]) / (c[i - 1] - c[i - 2])) * (rates[-1] - rates[-2])
+        self.v_end = self.rate_fields(f)
 
     def advance(self, y, f_a, f_b, h):
         """y after a step of ``h`` from ``y`` with the rates ``f_a`` at its start and ``f_b``
@@ -132,7 +144,7 @@ class FullyDynamic(QuasiDynamic):
             return np.abs(dd[self.comps[0]][s])
         return np.sqrt(sum(dd[c][s] ** 2 for c in self.comps))
 
-    def slow_rate(self, fraction=1e-3) -> float:
+    def slow_rate(self, fraction=SLOW_FRACTION) -> float:
         """The slip rate below which the radiation damping eta V moves the solved slip rate
         by at most ``fraction`` of a change of the traction's end rate: fraction times the
         least sigma a / eta over the sliding points (the slow steps' bound, predictor_corrector.py)."""

@@ -94,11 +94,12 @@ def tableau(pair):
 def try_step(system, pair, A, b, e, k, t, y, h):
     """(y_new, error estimate, whether every stage gave finite rates) of one step of ``h``
     from ``y`` with the rates ``k[0]`` there; each stage i is announced to the system
-    (``system.stage``: c_i h into the step, the rates of stage i - 1) before its rates."""
+    (``system.stage``: c_i h into the step, the rates of the stages before it, c_0 .. c_i)
+    before its rates."""
     try:
         for i in range(1, pair.stages):
             yi = y + h * (A[i] @ k[:i])
-            system.stage(pair.c[i] * h, k[i - 1])
+            system.stage(pair.c[i] * h, k[:i], pair.c[:i + 1])
             k[i] = system.rates(t + pair.c[i] * h, yi)
         y_new = yi if pair.fsal else y + h * (b @ k)
         err = h * (e @ k)

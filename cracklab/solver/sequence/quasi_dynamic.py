@@ -218,9 +218,10 @@ class QuasiDynamic:
         self._kept_places = (nodes, at, on)
         return at, on
 
-    def stage(self, dt, rates) -> None:
-        """Before a stage ``dt`` into a step, the previous stage's rates ``rates``: nothing for
-        the static response (dynamic.py prepares its history here)."""
+    def stage(self, dt, rates, c) -> None:
+        """Before the stage i ``dt`` = c_i h into a step, with the rates of the stages before it
+        (``rates``, a row each) and ``c`` = (c_0 .. c_i): nothing for the static response
+        (dynamic.py prepares its history here)."""
 
     def rates(self, t, y):
         """dy/dt at (t, y); keeps (V, tau, v) of the evaluation in ``last``."""
