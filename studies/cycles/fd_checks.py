@@ -36,12 +36,12 @@ def run_case(out, dz, years, beta, tolerance, slow=None) -> dict:
     from cracklab.solver.sequence.run import system_of
 
     scene = bp1(dz=dz, years=years, dynamic=True, tolerance=tolerance).replace(beta=beta)
-    name = f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{scene.sequence.tolerance:g}"
+    tol = scene.sequence.tolerance
+    name = f"bp1fd_check_dz{dz:g}_beta{beta:g}_tol{tol:g}"
     if slow is not None:
         rate = system_of(scene).slow_rate(slow)
         scene = scene.replace(sequence=dataclasses.replace(scene.sequence, slow_rate=rate))
         name += f"_slow{slow:g}"
-    tol = scene.sequence.tolerance
     return {"dz": dz, "beta": beta, "tolerance": tol, "years": years, "slow_fraction": slow,
             **catalogue(scene, Path(out) / f"{name}.zarr")}
 

@@ -376,15 +376,14 @@ def _fd_convergence(fd, keys, checks) -> list:
     tighter tolerance (``checks``, studies/cycles/fd_checks.py)."""
     lines = []
 
-    def within(a, b):
-        n = min(len(a), len(b))
-        ok = [abs(x - y) <= 1 for x, y in zip(a[:n], b[:n])]
-        upto = next((i for i, good in enumerate(ok) if not good), n)
-        return upto, n, (b[upto - 1] if upto else 0.0)
     def verdict(coarse, fine):
-        upto, n, year = within(fd[coarse]["earthquakes_yr"], fd[fine]["earthquakes_yr"])
+        """Whether the earthquakes of ``coarse`` and ``fine`` start within a year of each other."""
+        a, b = fd[coarse]["earthquakes_yr"], fd[fine]["earthquakes_yr"]
+        n = min(len(a), len(b))
+        upto = next((i for i in range(n) if abs(a[i] - b[i]) > 1), n)
         return (f"met for all {n} earthquakes" if upto == n
-                else f"met for the first {upto} earthquakes (to {year:.0f} years), not after")
+                else f"met for the first {upto} earthquakes (to {b[upto - 1] if upto else 0.0:.0f} years), not after")
+
     if "50" in fd and "25" in fd:
         lines += ["The target, event times within 1 year between 50 and 25 m over 1500 years, is "
                   + verdict("50", "25") + "."
