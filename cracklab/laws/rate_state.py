@@ -434,11 +434,12 @@ def _rate_loop(T, psi, sig, eta, a, sa, b, sb, V0, sV0, L, sL, f0, sf0, fw, sfw,
     (NaN: none), into ``V``, ``lnV``, and the state's rate dpsi/dt of the evolution ``law``
     at it into ``dpsi``; a parameter x comes with its stride sx (0: one value). Returns the
     first point that failed, or -1."""
+    ln2V0 = math.log(2.0 * V0[0]) if V0.size else 0.0     # ln(2 V0) of one V0 for every point, once
     for i in range(T.size):
         ai = a[i * sa]
         V0i = V0[i * sV0]
         x0 = guess[i]
-        v, x, it = _newton(T[i], sig[i] * ai, eta, psi[i] / ai - math.log(2.0 * V0i), x0,
+        v, x, it = _newton(T[i], sig[i] * ai, eta, psi[i] / ai - (math.log(2.0 * V0i) if sV0 else ln2V0), x0,
                            math.exp(x0) if x0 == x0 else 0.0, STEP_TOL)
         if it < 0:
             return i

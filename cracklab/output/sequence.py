@@ -195,10 +195,7 @@ class SequenceRecorder:
         scene, grid, seq = self.scene, self.scene.grid, self.scene.sequence
         if state.n > 0:
             self.smallest, self.largest = min(self.smallest, state.dt), max(self.largest, state.dt)
-        V = state.V[self.s1, self.s3]       # the recorded region (a builder's mirror image left out)
-        k = int(np.argmax(V))
-        vmax = float(V.flat[k])
-        where = tuple(int(i) + (sl.start or 0) for i, sl in zip(np.unravel_index(k, V.shape), (self.s1, self.s3)))
+        vmax, where = state.peak(self.s1, self.s3)     # the recorded region (a builder's mirror image left out)
         change = self.events.step(state, vmax, where) if state.n > 0 else None
         end = state.t >= scene.t_end
         if state.n % seq.station_every == 0 or change is not None or end:
@@ -206,7 +203,7 @@ class SequenceRecorder:
                                 ("x3", self.x3[where[1]]), ("time_step", state.dt)):
                 self.rows[name].append(float(value))
             for f in self.station_fields:       # read at the stations only (on a window: no field spread)
-                self.series[f].append(list(state.at(f, self.flat_nodes)))
+                self.series[f].append(state.at(f, self.flat_nodes))
         in_event = self.events.current is not None
         now = time.perf_counter()
         if self._clock is not None:

@@ -36,14 +36,15 @@ def steady_prestress(p, a, V, V_state, eta):
         (p["f0"] + p["b0"] * np.log(p["V0"] / V_state)) / a)) + eta * V
 
 
-def seas_sequence(dynamic, tolerance, V_p, creep, mirror=False):
+def seas_sequence(dynamic, tolerance, V_p, creep, mirror=False, pair="dormand_prince"):
     """A SEAS benchmark's Sequence: the plate rate V_p along x1 or x3 (``V_p`` = {component:
     rate}), the ``creep`` mask, fields every 5 years between events and every second during
     them (0.1 s in the fully dynamic response, ``dynamic``), steps of at most a year;
-    ``mirror``: the plane even about x1 = 0 (Sequence.mirror)."""
+    ``mirror``: the plane even about x1 = 0 (Sequence.mirror); ``pair``: Sequence.pair."""
     return Sequence(response="dynamic" if dynamic else "quasi_dynamic",
                     **{f"plate_rate_{c}": v for c, v in V_p.items()}, creep=creep, tolerance=tolerance,
-                    slow_interval=5 * YEAR, fast_interval=0.1 if dynamic else 1.0, dt_max=YEAR, mirror=mirror)
+                    slow_interval=5 * YEAR, fast_interval=0.1 if dynamic else 1.0, dt_max=YEAR, mirror=mirror,
+                    pair=pair)
 
 
 def bp1_station_name(depth_km: float) -> str:
@@ -59,7 +60,7 @@ def bp1_a(depth, H=BP1["H"]):
 
 
 def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, depth=320e3, tolerance=None,
-        H=15e3, D_c=0.008):
+        H=15e3, D_c=0.008, pair=None):
     """SEAS BP1-QD and BP1-FD (docs/studies/cycles.md): a vertical strike-slip fault in a half space,
     antiplane (the plane problem, slip along x3), rate-and-state friction with the ageing
     law as the benchmark states it (Erickson et al. 2020, Table 1): velocity weakening down
@@ -74,11 +75,16 @@ def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, dep
     ``fltst_dp<depth in 100 m>``; slip, slip rate, traction and state recorded every 5 years
     between events and every second during them (every 0.1 s in BP1-FD; ``record`` replaces the fields and
     stations). ``dynamic``: BP1-FD, the same fault with the fully dynamic response (its
-    history exact at a variable step, no step shorter than beta dz / c_s). ``tolerance``:
-    the step's relative error (cracklab.Sequence; None: 1e-5 for the quasi-dynamic pair of
-    order 5, 1e-4 for the dynamic predictor-corrector of order 2; event times within 1e-4
-    years of 1e-7's at 25 m over 1500 years (quasi-dynamic), within 0.004 years of 1e-6's
-    at 50 m (fully dynamic): docs/studies/cycles.md). ``H`` (the depth of the
+    history exact at a variable step, no step shorter than beta dz / c_s). ``pair`` and
+    ``tolerance``: the embedded pair and the step's relative error (cracklab.Sequence). The
+    tolerance is 1e-4 by default; the pair (None) is Bogacki-Shampine 3(2) above 1e-5 in the
+    quasi-dynamic response, Dormand-Prince 5(4) otherwise: where the pair's stability sets
+    the steps (events at 25 m, the slow phases) the pair of order 3 takes three rate
+    evaluations a step to the other's six, and below 1e-5 the pair of order 5 takes fewer
+    steps (the fully dynamic response steps events by its predictor-corrector of order 2
+    and takes the pair in the slow phases). Event times within 0.01 years of Dormand-Prince
+    5(4) at 1e-7 at 25 m over 1500 years (quasi-dynamic), within 0.004 years of 1e-6's at
+    50 m (fully dynamic): docs/studies/cycles.md. ``H`` (the depth of the
     velocity-weakening zone, m) and ``D_c`` (m) replace the benchmark's 15 km and 8 mm, for
     parameter studies (the transition below H stays h = 3 km; H + h below W_f)."""
     dz = check_positive("dz", dz)
@@ -87,7 +93,9 @@ def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, dep
         raise InputError("H", f"must leave the 3 km transition above W_f = {BP1['W_f']:g} m: H < "
                               f"{BP1['W_f'] - BP1['h']:g}, got {H!r}")
     years = check_positive("years", years)
-    tolerance = (1e-4 if dynamic else 1e-5) if tolerance is None else tolerance
+    tolerance = 1e-4 if tolerance is None else tolerance
+    if pair is None:
+        pair = "bogacki_shampine" if not dynamic and tolerance > 1e-5 else "dormand_prince"
     depth = check_positive("depth", depth)
     p = BP1
     n1 = int(round(2.0 * depth / dz))
@@ -109,7 +117,7 @@ def bp1(*, dz=25.0, years=1500.0, dynamic=False, record=None, numerics=None, dep
     if record is None:
         record = Record(fields=("delta_3", "v_3", "tau_3", "psi"), region={"x1": (0.0, depth)},
                         stations={bp1_station_name(d): (1e3 * d,) for d in BP1_DEPTHS})
-    seq = seas_sequence(dynamic, tolerance, {3: p["V_p"]}, creep, mirror=True)
+    seq = seas_sequence(dynamic, tolerance, {3: p["V_p"]}, creep, mirror=True, pair=pair)
     kw = {} if numerics is None else {"numerics": numerics}
     return Scene(material=mat, grid=grid, law=law, loading=Loading(tau0_3=float(tau0)), t_end=years * YEAR,
                  record=record, sequence=seq, units={"length": "m", "time": "s", "stress": "Pa"}, name="bp1", **kw)

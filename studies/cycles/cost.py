@@ -3,14 +3,14 @@
 
     python -m studies.cycles.cost --dz 25 [--steps 300000] [-o OUT/cost_dz25.json]
 
-Times, at the state a short run reaches, one evaluation of the rates (the step's unit:
-Dormand-Prince 5(4) takes six per accepted step) and its parts: the transforms of the
+Times, at the state a short run reaches, one evaluation of the rates (the step's unit: the
+builder's pair, Bogacki-Shampine 3(2), takes three per accepted step) and its parts: the transforms of the
 static response, the rate-and-state solve at the sliding points, the rest (glue); and the
 step's own arithmetic (the pair's stage sums, its error estimate and norm). Then the
 floor of a run of ``--steps`` accepted steps (the count of the study's run at that dz)
 if the glue and the step's own arithmetic cost nothing; and the steps in BP1-QD's first
 event at 200 m for four tolerances (whether the pair's accuracy or its stability sets
-the steps of a rupture)."""
+the steps of a rupture), with the builder's pair."""
 from __future__ import annotations
 
 import argparse
@@ -47,26 +47,37 @@ def breakdown(dz, years=2.0, repeats=200) -> dict:
     T = np.abs(system.traction(3.15e7, y)[system.comps[0]][s])[h]
     law = system.law
     rates = _best(lambda: system.rates(3.15e7, y), repeats)
-    transforms = _best(lambda: system.elastic(delta, 3.15e7), repeats)
+    c = system.comps[0]
+    if system.window is not None and len(system.comps) == 1:      # what ``rates`` calls on a window
+        transforms = _best(lambda: system.window.traction_one(delta[c], system.plate[c] * 3.15e7), repeats)
+    else:
+        transforms = _best(lambda: system.elastic(delta, 3.15e7), repeats)
     solve = _best(lambda: law.slide_rates(T, psi[s][h], system.sigma_s[h], system.eta, guess=system.lnV,
                                           at=system.at), repeats)
     step = _step(scene, system, y, repeats)
-    return {"dz": dz, "nodes": int(scene.grid.n1 * scene.grid.n3), "points": int(system.n),
+    evals = _pair(scene).evaluations
+    return {"pair": scene.sequence.pair, "evaluations": evals, "dz": dz, "nodes": int(scene.grid.n1 * scene.grid.n3),
+            "points": int(system.n),
             "sliding_points": int(s.sum()), "solved_points": int(system.solved), "rates_s": rates,
             "transforms_s": transforms, "solve_s": solve, "glue_s": rates - transforms - solve,
-            "step_own_s": step, "step_s": 6 * rates + step}
+            "step_own_s": step, "step_s": evals * rates + step}
+
+
+def _pair(scene):
+    from cracklab.solver.sequence.pairs import PAIRS
+
+    return PAIRS[scene.sequence.pair]
 
 
 def _step(scene, system, y, repeats):
-    """Seconds of an accepted step's own arithmetic, without its six evaluations: the
+    """Seconds of an accepted step's own arithmetic, without its evaluations: the
     pair's stage sums and error estimate (integrate.try_step, with rates that cost nothing)
     and the error's norm (integrate.error_norm)."""
     from types import SimpleNamespace
 
     from cracklab.solver.sequence.integrate import error_norm, tableau, try_step
-    from cracklab.solver.sequence.pairs import PAIRS
 
-    pair = PAIRS[scene.sequence.pair]
+    pair = _pair(scene)
     A, b, e = tableau(pair)
     f = system.rates(3.15e7, y)
     k = np.empty((pair.stages, y.size))
@@ -78,19 +89,21 @@ def _step(scene, system, y, repeats):
     return sums + norm
 
 
-def event_steps(dz=200.0, tolerances=(1e-4, 1e-5, 1e-6, 1e-7), depth=80e3, years=230.0) -> dict:
+def event_steps(dz=200.0, tolerances=(1e-3, 1e-4, 1e-5), depth=80e3, years=230.0) -> dict:
     """{tolerance: accepted steps in events} of BP1-QD's first event (at ``dz``, the creeping
-    region to ``depth``): how the pair's steps in a rupture grow with its tolerance."""
+    region to ``depth``) with the builder's pair: how its steps in a rupture grow with its
+    tolerance."""
     from cracklab import Record, simulate
     from cracklab.scenes import bp1
 
+    pair = bp1(dz=dz, years=years, depth=depth).sequence.pair
     out = {}
     for tol in tolerances:
-        sc = bp1(dz=dz, years=years, tolerance=tol, depth=depth,
+        sc = bp1(dz=dz, years=years, tolerance=tol, depth=depth, pair=pair,
                  record=Record(fields=("v_3",), region={"x1": (0.0, depth)}, stations={}))
         ds = simulate(sc)
         out[f"{tol:g}"] = int(np.sum(ds.max_slip_rate.values >= ds.attrs["event_threshold"]))
-    return {"dz": dz, "depth": depth, "years": years, "steps_in_events": out}
+    return {"dz": dz, "depth": depth, "years": years, "pair": pair, "steps_in_events": out}
 
 
 def main(argv=None) -> int:
@@ -102,7 +115,7 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     b = breakdown(args.dz)
     b["first_event"] = event_steps()
-    floor = 6 * (b["transforms_s"] + b["solve_s"])
+    floor = b["evaluations"] * (b["transforms_s"] + b["solve_s"])
     b["step_floor_s"] = floor
     if args.steps:
         b.update({"steps": args.steps, "run_s": args.steps * b["step_s"], "run_floor_s": args.steps * floor})

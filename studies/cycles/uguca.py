@@ -46,7 +46,7 @@ def run_cracklab(out, dz, log=print) -> dict:
     from cracklab.scenes import bp1
 
     store = Path(out) / f"bp1_depth50km_dz{dz:g}.zarr"
-    sc = bp1(dz=dz, years=1500.0, depth=50e3,
+    sc = bp1(dz=dz, years=1500.0, depth=50e3, tolerance=1e-7, pair="dormand_prince",
              record=Record(fields=("v_3",), region={"x1": (0.0, 50e3)}, stations={}))
     t0 = time.time()
     if store.exists() and xr.open_zarr(store).attrs.get("cracklab_status") == "complete":

@@ -30,7 +30,7 @@ def test_periodic_box_is_the_shortest_run_holding_the_mask(mask_of):
     assert m == best
 
 
-@pytest.mark.parametrize("case", ["plane", "3d_shear", "3d_stiff"])
+@pytest.mark.parametrize("case", ["plane", "3d_shear", "3d_stiff", "3d_one"])
 def test_window_traction_is_the_grid_traction(case):
     from cracklab import Grid
     from cracklab.solver.sequence.static import StaticResponse
@@ -43,6 +43,7 @@ def test_window_traction_is_the_grid_traction(case):
         mask[:50] = mask[-49:] = True                     # a fault and its image about x1 = 0
     else:
         g, comps, k = Grid(n1=96, n3=80, L1=960.0, L3=800.0), (1, 3), (2e6 if case == "3d_stiff" else 0.0)
+        comps = (3,) if case == "3d_one" else comps
         mask = np.zeros(g.shape, bool)
         mask[90:, 10:30] = mask[:12, 10:30] = True
     static = StaticResponse(material(), g, comps, stiffness=k)
@@ -54,6 +55,9 @@ def test_window_traction_is_the_grid_traction(case):
     for c in comps:
         want = full[c].ravel()[win.points]
         assert np.max(np.abs(got[c] - want)) < 1e-12 * np.max(np.abs(want)), c
+    if len(comps) == 1:         # one component less a shift, through FFTW's arrays: the same numbers
+        c, x = comps[0], slip[comps[0]].ravel()[win.points]
+        assert np.array_equal(win.traction_one(x + 0.25, 0.25), win.traction({c: (x + 0.25) - 0.25})[c])
 
 
 def test_a_window_as_long_as_half_the_axis_takes_the_whole_axis():
@@ -157,3 +161,30 @@ def test_fields_at_a_few_nodes_are_the_fields_over_the_grid():
             full = (x[int(c)] if c else x).ravel()[nodes]
             assert np.array_equal(lazy, full), name
     assert states[-1].at("delta_3", off[:1])[0] == 1e-9 * states[-1].t          # the plate's slip where it creeps
+
+
+def test_the_largest_slip_rate_read_on_the_window_is_the_grids():
+    """``SequenceState.peak`` (what the recorder takes at every step, without spreading the
+    slip rate over the grid) is the largest slip rate over the slices and the first node in
+    the grid's order that has it, as ``np.argmax`` over the field on the grid: at t = 0,
+    where every node slides at the plate rate to round-off, and later; on the recorded half,
+    on regions across the window's edge, inside it, and in the creeping region alone (where
+    every node ties at the plate rate)."""
+    import itertools
+
+    from cracklab.scenes import bp1
+    from cracklab.solver.sequence.run import SequenceRun
+
+    run = SequenceRun(bp1(dz=200.0, years=50.0, depth=160e3))
+    states = list(itertools.islice(run, 30))
+    n1 = run.scene.grid.n1
+    regions = [(slice(0, n1 // 2 + 1), slice(None)), (slice(100, n1 - 3), slice(None)), (slice(5, 60), slice(None)),
+               (slice(300, 700), slice(None))]
+    for state in (states[0], states[1], states[-1]):
+        for s1, s3 in regions:
+            V = state.V[s1, s3]
+            k = int(np.argmax(V))
+            node = tuple(int(i) + (sl.start or 0) for i, sl in zip(np.unravel_index(k, V.shape), (s1, s3)))
+            # a state whose field over the grid is not computed yet, as the recorder gets it
+            fresh = type(state)(state.n, state.t, state.dt, state.grid_of, state.at_of, state.peak_of)
+            assert fresh.peak(s1, s3) == (float(V.flat[k]), node), (state.n, s1)

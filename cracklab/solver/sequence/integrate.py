@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...errors import SimulationError
+from ...jit import njit
 
 
 @dataclass(frozen=True)
@@ -27,13 +28,34 @@ class Accepted:
 
 def error_norm(system, y_new, err, tolerance):
     """(largest scaled error, its index) of the error estimate ``err`` at the new unknowns:
-    |err| / (tolerance * scale) over the points the system integrates (system.scales)."""
-    scale, keep = system.scales(y_new)
-    ratio = np.abs(err[keep]) / (tolerance * scale[keep])
-    if ratio.size == 0:
-        return 0.0, -1
-    i = int(np.argmax(ratio)) if np.all(np.isfinite(ratio)) else int(np.flatnonzero(~np.isfinite(ratio))[0])
-    return float(ratio[i]), int(np.flatnonzero(keep)[i])
+    |err| / (tolerance * scale) over the points the system integrates (system.scales: slip
+    against L + |slip|, state against a), in one compiled pass; the first error that is not
+    finite when there is one."""
+    L, a, keep = system.error_weights()
+    size, where = _largest_ratio(err, y_new, L, a, keep, float(tolerance))
+    return float(size), int(where)
+
+
+@njit()
+def _largest_ratio(err, y, L, a, keep, tolerance):
+    """(largest |err| / (tolerance scale), its index) over the unknowns whose points ``keep``
+    holds: scale L + |y| in the slip blocks (one per component), a in the last (psi); the
+    first ratio that is not finite when there is one; (0, -1) with none kept."""
+    n = keep.size
+    blocks = y.size // n
+    best, where = 0.0, -1
+    for b in range(blocks):
+        for i in range(n):
+            if not keep[i]:
+                continue
+            j = b * n + i
+            scale = a[i] if b == blocks - 1 else L[i] + abs(y[j])
+            r = abs(err[j]) / (tolerance * scale)
+            if not (r <= 1e308):            # NaN or inf: this one
+                return r, j
+            if r > best or where < 0:
+                best, where = r, j
+    return best, where
 
 
 def end_step(t, t_end, h, dt_min, split=False):
@@ -98,14 +120,33 @@ def try_step(system, pair, A, b, e, k, t, y, h):
     before its rates."""
     try:
         for i in range(1, pair.stages):
-            yi = y + h * (A[i] @ k[:i])
+            yi = _weighted(y, h, A[i], k)
             system.stage(pair.c[i] * h, k[:i], pair.c[:i + 1])
             k[i] = system.rates(t + pair.c[i] * h, yi)
-        y_new = yi if pair.fsal else y + h * (b @ k)
-        err = h * (e @ k)
+        y_new = yi if pair.fsal else _weighted(y, h, b, k)
+        err = _weighted(None, h, e, k)
     except (SimulationError, FloatingPointError):
         return y, np.full_like(y, np.nan), False
     return y_new, err, bool(np.all(np.isfinite(y_new)))
+
+
+@njit()
+def _weighted(y, h, w, k):
+    """y + h sum_l w_l k_l (a new array; without y when it is None): a stage's unknowns or
+    the error estimate, from the stages' rates (the rows of k, the first w.size of them)."""
+    n = k.shape[1]
+    acc = np.zeros(n)
+    for i in range(w.size):         # row by row: each pass runs along a row of k
+        wi = w[i]
+        for j in range(n):
+            acc[j] += wi * k[i, j]
+    if y is None:
+        for j in range(n):
+            acc[j] *= h
+    else:
+        for j in range(n):
+            acc[j] = y[j] + h * acc[j]
+    return acc
 
 
 def place(system, where) -> str:

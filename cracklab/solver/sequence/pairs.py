@@ -22,6 +22,12 @@ class EmbeddedPair:
     def stages(self) -> int:
         return len(self.c)
 
+    @property
+    def evaluations(self) -> int:
+        """Rate evaluations per accepted step: the stages less the first when it is the last
+        stage of the step before (fsal)."""
+        return self.stages - 1 if self.fsal else self.stages
+
 
 #: Dormand & Prince (1980), RK5(4)7FM: order 5, error of order 4, first same as last
 DORMAND_PRINCE = EmbeddedPair(

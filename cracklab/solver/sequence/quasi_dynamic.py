@@ -64,10 +64,9 @@ class QuasiDynamic:
         self.sigma = np.ascontiguousarray(sigma[pts])
         self.sigma_s = np.ascontiguousarray(self.sigma[self.slides])
         self.plate_speed = float(np.sqrt(sum(v * v for v in self.plate.values())))
-        # the error scales (``scales``): L and a at every point, and the points integrated
+        # the error's scales (``error_weights``): L and a at every point
         self._L, self._a = (np.broadcast_to(np.asarray(getattr(law, name), dtype=float), shape).ravel()[pts]
                             for name in ("L", "a"))
-        self._keep = np.concatenate([self.slides] * (len(comps) + 1))
         # the state at t = 0 (``initial``), from the load over the grid
         T = np.sqrt(sum(x ** 2 for x in tau0.values()))
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -104,7 +103,7 @@ class QuasiDynamic:
         self._solve_of = every if self._half is None else self._both.astype(np.int64)
         self._image_at = np.zeros(0, np.int64) if self.image is None else self.image.astype(np.int64)
         self._sigma_solved = self.sigma_s if self._half is None else self._sigma_half
-        self._kept_places = None
+        self._kept_places = self._kept_region = None
         self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -150,11 +149,13 @@ class QuasiDynamic:
         return {c: x.ravel() for c, x in F.items()}
 
     def fields(self, t, y, last):
-        """(grid_of, at_of) at (t, y), ``last`` the evaluation there: ``grid_of(name)`` the
-        field ``name`` over the grid ({component: field} for "delta", "v", "tau"; a field for
-        "psi" and "V"), ``at_of(name, nodes)`` the field ("delta_3", "psi", ...) at the flat
-        indices ``nodes`` of the grid. On a window each is computed when asked: the creeping
-        region's values are the plate's, its tau needs the grid's transforms."""
+        """(grid_of, at_of, peak_of) at (t, y), ``last`` the evaluation there: ``grid_of(name)``
+        the field ``name`` over the grid ({component: field} for "delta", "v", "tau"; a field
+        for "psi" and "V"), ``at_of(name, nodes)`` the field ("delta_3", "psi", ...) at the flat
+        indices ``nodes`` of the grid, ``peak_of(s1, s3)`` (the largest slip rate over the
+        grid's nodes [s1, s3], its node (i, k): the first in the grid's order that has it). On
+        a window each is computed when asked: the creeping region's values are the plate's,
+        its tau needs the grid's transforms."""
         V, tau, v = last
         delta, psi = self.split(y)
         shape = self.grid.shape
@@ -167,7 +168,13 @@ class QuasiDynamic:
             def grid_of(name):
                 x = flat[name]
                 return {c: a.reshape(shape) for c, a in x.items()} if isinstance(x, dict) else x.reshape(shape)
-            return grid_of, lambda name, nodes: values(name)[nodes]
+
+            def peak_of(s1, s3):
+                Vr = V.reshape(shape)[s1, s3]
+                k = int(np.argmax(Vr))
+                return float(Vr.flat[k]), tuple(int(i) + (sl.start or 0)
+                                                for i, sl in zip(np.unravel_index(k, Vr.shape), (s1, s3)))
+            return grid_of, lambda name, nodes: values(name)[nodes], peak_of
         pts, N = self.points, int(np.prod(shape))
         outside = {"delta": lambda c: self.plate[c] * t, "v": lambda c: self.plate[c], "psi": lambda c: 0.0,
                    "V": lambda c: self.plate_speed}
@@ -199,24 +206,49 @@ class QuasiDynamic:
             return out
 
         def at_of(name, nodes):
-            at, on = self._places(nodes)
-            if name.startswith("tau_") and not np.all(on):        # the creeping region's tau: the grid's
+            at, on, every = self._places(nodes)
+            if every:                                   # every node on the window
+                return values(name)[at]
+            if name.startswith("tau_"):                 # the creeping region's tau: the grid's
                 return grid_of("tau")[int(name[4:])].ravel()[nodes]
             kind, _, c = name.partition("_")
             return np.where(on, values(name)[at], outside.get(kind, lambda c: np.nan)(int(c) if c else None))
-        return grid_of, at_of
+
+        def peak_of(s1, s3):
+            inside, first_out = self._region(s1, s3)
+            m, node = -np.inf, N
+            if inside.size:
+                j = int(np.argmax(V[inside]))
+                m, node = float(V[inside[j]]), int(pts[inside[j]])
+            if first_out >= 0 and (self.plate_speed > m or (self.plate_speed == m and first_out < node)):
+                m, node = self.plate_speed, first_out
+            return m, tuple(int(i) for i in np.unravel_index(node, shape))
+        return grid_of, at_of, peak_of
+
+    def _region(self, s1, s3):
+        """(the places among the window's points of the grid's nodes [s1, s3], the first of
+        those nodes outside the window or -1), kept for the last slices asked."""
+        key = (s1, s3)
+        kept = self._kept_region
+        if kept is not None and kept[0] == key:
+            return kept[1], kept[2]
+        shape = self.grid.shape
+        nodes = np.arange(int(np.prod(shape))).reshape(shape)[s1, s3].ravel()
+        at, on = _locate(self.points, nodes)
+        out = nodes[~on]
+        self._kept_region = (key, np.ascontiguousarray(at[on]), int(out[0]) if out.size else -1)
+        return self._kept_region[1], self._kept_region[2]
 
     def _places(self, nodes):
         """(the place among the window's points of each of the flat grid indices ``nodes``,
-        whether it is one of them), kept for the last array asked (a recorder's stations)."""
+        whether it is one of them, whether all are), kept for the last array asked (a
+        recorder's stations)."""
         kept = self._kept_places
         if kept is not None and kept[0] is nodes:
-            return kept[1], kept[2]
-        pts = self.points
-        at = np.minimum(np.searchsorted(pts, nodes), pts.size - 1)
-        on = pts[at] == nodes
-        self._kept_places = (nodes, at, on)
-        return at, on
+            return kept[1:]
+        at, on = _locate(self.points, nodes)
+        self._kept_places = (nodes, at, on, bool(np.all(on)))
+        return self._kept_places[1:]
 
     def stage(self, dt, rates, c) -> None:
         """Before the stage i ``dt`` = c_i h into a step, with the rates of the stages before it
@@ -262,7 +294,12 @@ class QuasiDynamic:
         """``rates`` of one slipping component: the traction gathered at the points solved
         (a node and its image once) and the solve's rates scattered back, compiled."""
         n, c = self.n, self.comps[0]
-        F = self.elastic({c: y[:n]}, t)[c]
+        if self.window is not None:
+            F = self.window.traction_one(y[:n], self.plate[c] * t)
+            if self.stiffness:
+                F = F - self.stiffness * self.plate[c] * t
+        else:
+            F = self.elastic({c: y[:n]}, t)[c]
         tau = np.empty(n)
         T = np.empty(self._solve_at.size)
         psi = np.empty(self._solve_at.size)
@@ -276,11 +313,17 @@ class QuasiDynamic:
         self.last = (V, {c: tau}, {c: dy[:n].copy()})
         return dy
 
-    def scales(self, y):
-        """The error scale of each unknown relative to the tolerance: slip against L + |slip|,
-        state against a (an error of a in psi is a factor e in V)."""
-        delta, _ = self.split(y)
-        return np.concatenate([self._L + np.abs(delta[c]) for c in self.comps] + [self._a]), self._keep
+    def error_weights(self):
+        """(L, a, the points integrated) at the unknowns' points: the error of the slip is
+        scaled by L + |slip|, that of the state by a (an error of a in psi is a factor e in V);
+        integrate.error_norm."""
+        return self._L, self._a, self.slides
+
+
+def _locate(points, nodes):
+    """(the place in the increasing ``points`` of each of ``nodes``, whether it is there)."""
+    at = np.minimum(np.searchsorted(points, nodes), points.size - 1)
+    return at, points[at] == nodes
 
 
 @njit()

@@ -22,13 +22,15 @@ class SequenceState:
     """After accepted step ``n`` (time ``t``, reached by a step ``dt``): the fields over the
     grid, {component: array} for ``delta``, ``v``, ``tau``; ``psi`` and the slip rate
     magnitude ``V``, each computed when first asked (``grid_of``: name -> field, from the
-    system's ``fields``); :meth:`at` reads a field at a few nodes without it (``at_of``)."""
+    system's ``fields``); :meth:`at` reads a field at a few nodes without it (``at_of``),
+    :meth:`peak` the largest slip rate and its node (``peak_of``)."""
 
     n: int
     t: float
     dt: float
     grid_of: Callable = field(repr=False)
     at_of: Callable = field(repr=False)
+    peak_of: Callable = field(repr=False)
 
     @cached_property
     def delta(self) -> dict:
@@ -58,6 +60,11 @@ class SequenceState:
             x = self.__dict__[kind]
             return (x[int(c)] if c else x).ravel()[nodes]
         return self.at_of(name, nodes)
+
+    def peak(self, s1, s3) -> tuple:
+        """(the largest slip rate over the grid's nodes [s1, s3], its node (i, k)), the first
+        node in the grid's order that has it; without the field over the grid."""
+        return self.peak_of(s1, s3)
 
 
 def system_of(scene, transforms=None) -> QuasiDynamic:

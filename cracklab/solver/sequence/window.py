@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.fft as sfft
 
+from ...jit import njit
 from ..spectral import backend_name, pyfftw
 
 
@@ -99,6 +100,23 @@ class WindowedStatic:
             out[a] = np.ascontiguousarray(field).ravel()[self.from_box]
         return out
 
+    def traction_one(self, slip, shift=0.0):
+        """:meth:`traction` of one component's slip less ``shift`` (a number) at ``points``: the
+        same numbers, gathered into and out of FFTW's arrays in compiled passes (a new array)."""
+        if not self.fftw or len(self.comps) != 1:
+            c = self.comps[0]
+            return self.traction({c: np.asarray(slip, dtype=float) - shift})[c]
+        fwd, inv = self._plans or self._plan()
+        b0, b1 = self.box
+        _into_box(slip, self.to_box, shift, fwd.input_array[:b0, :b1])
+        fwd.execute()
+        c = self.comps[0]
+        np.multiply(self.kernels[c, c], fwd.output_array, out=inv.input_array)
+        inv.execute()
+        out = np.empty(self.points.size)
+        _out_of_box(inv.output_array[:b0, :b1], self.from_box, out)
+        return out
+
     def _forward(self, box):
         """The spectrum of ``box`` padded with zeros to ``size``."""
         if not self.fftw:
@@ -138,3 +156,20 @@ class WindowedStatic:
         fwd.input_array[...] = 0.0          # planning wrote into it; the padding stays zero from here
         self._plans = (fwd, inv)
         return self._plans
+
+
+@njit()
+def _into_box(values, to_box, shift, box):
+    """box (row-major cells) = values[to_box] - shift."""
+    m = box.shape[1]
+    for p in range(to_box.size):
+        box[p // m, p % m] = values[to_box[p]] - shift
+
+
+@njit()
+def _out_of_box(box, from_box, out):
+    """out[q] = the cell from_box[q] of box (row-major)."""
+    m = box.shape[1]
+    for q in range(from_box.size):
+        f = from_box[q]
+        out[q] = box[f // m, f % m]
