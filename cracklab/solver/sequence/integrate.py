@@ -28,9 +28,9 @@ class Accepted:
 
 def error_norm(system, y_new, err, tolerance):
     """(largest scaled error, its index) of the error estimate ``err`` at the new unknowns:
-    |err| / (tolerance * scale) over the points the system integrates (system.scales: slip
-    against L + |slip|, state against a), in one compiled pass; the first error that is not
-    finite when there is one."""
+    |err| / (tolerance * scale) over the points the system integrates (system.error_weights:
+    slip against L + |slip|, state against a), in one compiled pass; the first error that is
+    not finite when there is one."""
     L, a, keep = system.error_weights()
     size, where = _largest_ratio(err, y_new, L, a, keep, float(tolerance))
     return float(size), int(where)
