@@ -9,7 +9,7 @@ static response, the rate-and-state solve at the sliding points, the rest (glue)
 step's own arithmetic (the pair's stage sums, its error estimate and norm). Then the
 floor of a run of ``--steps`` accepted steps (the count of the study's run at that dz)
 if the glue and the step's own arithmetic cost nothing; and the steps in BP1-QD's first
-event at 200 m for four tolerances (whether the pair's accuracy or its stability sets
+event at 200 m for three tolerances (whether the pair's accuracy or its stability sets
 the steps of a rupture), with the builder's pair."""
 from __future__ import annotations
 
@@ -47,11 +47,7 @@ def breakdown(dz, years=2.0, repeats=200) -> dict:
     T = np.abs(system.traction(3.15e7, y)[system.comps[0]][s])[h]
     law = system.law
     rates = _best(lambda: system.rates(3.15e7, y), repeats)
-    c = system.comps[0]
-    if system.window is not None and len(system.comps) == 1:      # what ``rates`` calls on a window
-        transforms = _best(lambda: system.window.traction_one(delta[c], system.plate[c] * 3.15e7), repeats)
-    else:
-        transforms = _best(lambda: system.elastic(delta, 3.15e7), repeats)
+    transforms = _best(lambda: system.elastic(delta, 3.15e7), repeats)
     solve = _best(lambda: law.slide_rates(T, psi[s][h], system.sigma_s[h], system.eta, guess=system.lnV,
                                           at=system.at), repeats)
     step = _step(scene, system, y, repeats)

@@ -140,7 +140,7 @@ class QuasiDynamic:
         """{component: F} of the slips ``delta`` at the unknowns' points (flat) at time ``t``:
         the static response (on the window: of the slip less V_p t, less k V_p t, window.py)."""
         if self.window is not None:
-            F = self.window.traction({c: delta[c] - self.plate[c] * t for c in self.comps})
+            F = self.window.traction(delta, {c: self.plate[c] * t for c in self.comps})
             if self.stiffness:
                 F = {c: x - self.stiffness * self.plate[c] * t for c, x in F.items()}
             return F
@@ -294,12 +294,7 @@ class QuasiDynamic:
         """``rates`` of one slipping component: the traction gathered at the points solved
         (a node and its image once) and the solve's rates scattered back, compiled."""
         n, c = self.n, self.comps[0]
-        if self.window is not None:
-            F = self.window.traction_one(y[:n], self.plate[c] * t)
-            if self.stiffness:
-                F = F - self.stiffness * self.plate[c] * t
-        else:
-            F = self.elastic({c: y[:n]}, t)[c]
+        F = self.elastic({c: y[:n]}, t)[c]
         tau = np.empty(n)
         T = np.empty(self._solve_at.size)
         psi = np.empty(self._solve_at.size)

@@ -88,11 +88,20 @@ class WindowedStatic:
                 K[np.ix_(dst[0], dst[1])] = F[a][np.ix_(src[0], src[1])]
                 self.kernels[a, b] = scale * self._scipy_forward(K)
 
-    def traction(self, slip: dict) -> dict:
-        """{component: static traction at ``points``} of {component: slip at ``points``} that
-        is zero outside the window."""
-        spectra = {b: self._forward(np.asarray(slip[b], dtype=float)[self.to_box].reshape(self.box))
-                   for b in self.comps}
+    def traction(self, slip: dict, shift=None) -> dict:
+        """{component: static traction at ``points``} of {component: slip at ``points``, less
+        ``shift`` ({component: a number}; None: nothing)} that is zero outside the window. One
+        component with FFTW goes into and out of FFTW's arrays in compiled passes: the same
+        numbers as the general path (``_traction``), without its copies."""
+        shift = shift or {}
+        if self.fftw and len(self.comps) == 1:
+            c = self.comps[0]
+            return {c: self._traction_one(slip[c], float(shift.get(c, 0.0)))}
+        return self._traction(slip, shift)
+
+    def _traction(self, slip, shift):
+        spectra = {b: self._forward((np.asarray(slip[b], dtype=float)[self.to_box] - shift.get(b, 0.0))
+                                    .reshape(self.box)) for b in self.comps}
         out = {}
         for a in self.comps:
             acc = sum(self.kernels[a, b] * spectra[b] for b in self.comps)
@@ -100,12 +109,7 @@ class WindowedStatic:
             out[a] = np.ascontiguousarray(field).ravel()[self.from_box]
         return out
 
-    def traction_one(self, slip, shift=0.0):
-        """:meth:`traction` of one component's slip less ``shift`` (a number) at ``points``: the
-        same numbers, gathered into and out of FFTW's arrays in compiled passes (a new array)."""
-        if not self.fftw or len(self.comps) != 1:
-            c = self.comps[0]
-            return self.traction({c: np.asarray(slip, dtype=float) - shift})[c]
+    def _traction_one(self, slip, shift):
         fwd, inv = self._plans or self._plan()
         b0, b1 = self.box
         _into_box(slip, self.to_box, shift, fwd.input_array[:b0, :b1])
