@@ -16,11 +16,11 @@ from ..errors import InputError
 from ..laws.base import cell_area_and_width
 from ..model.scene_io import scene_to_json
 from ..model.units import unit
+from ..solver.budget import SEQUENCE_ROWS, SEQUENCE_SNAPSHOT_BYTES
 from ..solver.sequence.run import SequenceRun
 from ..version import __version__
 from . import checkpoint, verify
 from .attrs import field_attrs, input_attrs
-from .disk import FLUSH
 from .policy import checkpoint_policy
 
 #: why a snapshot was taken (``snapshot_kind``: the index): the slow and fast cadences,
@@ -75,10 +75,10 @@ class _Events:
             t0, v0 = self.prev
             ev = self.current = {"t_start": _crossing(t0, v0, t, vmax, self.threshold),
                                  "hypocentre": where, "peak": (t, vmax), "slip0": _slip(state),
-                                 "vmax": state.V.copy()}
+                                 "vmax": state.largest()}       # at the system's points: no grid a step
             out = "start"
         elif ev is not None:
-            np.maximum(ev["vmax"], state.V, out=ev["vmax"])
+            state.largest(ev["vmax"])
             if vmax > ev["peak"][1]:
                 ev["peak"] = (t, vmax)
             if len(self.window) == PEAK_SAMPLES and self.window[PEAK_SAMPLES // 2][1] >= max(
@@ -97,7 +97,7 @@ class _Events:
         scene = self.scene
         grid = scene.grid
         slip = _slip(state) - ev["slip0"]
-        area = ev["vmax"] >= self.threshold
+        area = state.spread("V", ev["vmax"]) >= self.threshold
         cell, _ = cell_area_and_width(grid)
         region = np.zeros(grid.shape, bool)
         region[self.s1, self.s3] = True
@@ -179,6 +179,7 @@ class SequenceRecorder:
         self.slow, self.fast = seq.intervals(grid.dx_min, scene.material.cs, scene.t_end)
         self.events = _Events(scene, self.s1, self.s3)
         self.snaps, self.snap_t, self.snap_kind = [], [], []
+        self.snap_bytes = 0     # of the snapshots kept
         self.rows = {name: [] for name in ("t_station", "max_slip_rate", "x1", "x3", "time_step")}
         self.series = {f: [] for f in self.station_fields}
         self.next_snapshot = 0.0
@@ -211,6 +212,7 @@ class SequenceRecorder:
         self._clock = now
         if self.fields and (state.t >= self.next_snapshot or change is not None or end):
             self.snaps.append({f: _field(state, f)[self.s1, self.s3].copy() for f in self.fields})
+            self.snap_bytes += sum(x.nbytes for x in self.snaps[-1].values())
             self.snap_t.append(state.t)
             self.snap_kind.append(change or ("fast" if in_event else "slow"))
             self.next_snapshot = state.t + (self.fast if in_event else self.slow)
@@ -283,8 +285,14 @@ class SequenceRecorder:
                     "wall_time_in_events": self.wall["fast"], "wall_time_between_events": self.wall["slow"]}
         return ds
 
+    def full(self) -> bool:
+        """Whether what is kept should be written: SEQUENCE_SNAPSHOT_BYTES of snapshots or
+        SEQUENCE_ROWS rows of the station series (solver/budget.py counts as much)."""
+        return self.snap_bytes >= SEQUENCE_SNAPSHOT_BYTES or len(self.rows["t_station"]) >= SEQUENCE_ROWS
+
     def _clear(self):
         self.snaps, self.snap_t, self.snap_kind = [], [], []
+        self.snap_bytes = 0
         self.rows = {name: [] for name in self.rows}
         self.series = {f: [] for f in self.station_fields}
 
@@ -446,7 +454,7 @@ def run_sequence(scene, *, progress=False, store=None, resume=False, checkpoint_
             bar.update(state.t - bar.n)
         due = (every_n is not None and run.n % every_n == 0 and run.n > 0) or \
             (every_s is not None and time.monotonic() - last_ck >= every_s)
-        if path is not None and not due and (len(rec.snaps) >= FLUSH or len(rec.rows["t_station"]) >= CHUNK):
+        if path is not None and not due and rec.full():
             rec.flush()             # memory bounded: a resume cuts what came after its checkpoint
         if path is not None and due:
             rec.flush()

@@ -33,6 +33,11 @@ PROCESS_BYTES = 400 << 20
 #: env variable capping the memory cracklab counts as available ("8GB", "512MB", bytes)
 LIMIT_ENV = "CRACKLAB_MEMORY_LIMIT"
 _FLUSH = 8              # snapshots the recorder keeps before writing them to the store
+#: what a sequence's recorder keeps before it writes to its store (output/sequence.py): its
+#: snapshots up to this many bytes, its rows of station series up to this many (a write
+#: costs about a tenth of a second whatever it holds; a checkpoint writes them too)
+SEQUENCE_SNAPSHOT_BYTES = 32 << 20
+SEQUENCE_ROWS = 16384
 
 
 @dataclass(frozen=True)
@@ -241,8 +246,8 @@ def calibrate(scene, *, steps: int = 12, seconds: float = 3.0) -> dict:
 def _sequence_memory(scene, store) -> MemoryEstimate:
     """A sequence run (solver/sequence): the unknowns and the pair's stages, the traction
     and the transforms' arrays, the history at a variable step of the dynamic response,
-    the snapshots kept (all of them without a store; the expected count,
-    ``Sequence.expected_rows``) and the station rows."""
+    the snapshots kept (all of them without a store, else up to SEQUENCE_SNAPSHOT_BYTES; the
+    expected count, ``Sequence.expected_rows``) and the station rows (up to SEQUENCE_ROWS)."""
     grid, rec = scene.grid, scene.record
     N = grid.shape[0] * grid.shape[1]
     nc = len([c for c in scene.components if c in (1, 3)]) or 1
@@ -251,9 +256,10 @@ def _sequence_memory(scene, store) -> MemoryEstimate:
     n1r, n3r = (len(range(*s.indices(n))) for s, n in zip(rec.region_slices(grid), grid.shape))
     history = _dynamic_history(scene) if scene.sequence.response == "dynamic" else 0
     nsnap, rows = scene.sequence.expected_rows(scene)
-    kept = min(nsnap, _FLUSH) if store else nsnap
-    snapshots = kept * n1r * n3r * 8 * len(rec.fields)
-    series = min(rows, 4096 if store else rows) * (len(rec.stations or {}) * (3 * nc + 1) + 5) * 8 * 2
+    one = n1r * n3r * 8 * len(rec.fields)          # a snapshot's bytes
+    kept = min(nsnap, SEQUENCE_SNAPSHOT_BYTES // max(one, 1) + 1) if store else nsnap
+    snapshots = kept * one
+    series = min(rows, SEQUENCE_ROWS if store else rows) * (len(rec.stations or {}) * (3 * nc + 1) + 5) * 8 * 2
     return MemoryEstimate(int(history), int(work), int(snapshots + series), int(rows))
 
 

@@ -186,5 +186,5 @@ def test_the_largest_slip_rate_read_on_the_window_is_the_grids():
             k = int(np.argmax(V))
             node = tuple(int(i) + (sl.start or 0) for i, sl in zip(np.unravel_index(k, V.shape), (s1, s3)))
             # a state whose field over the grid is not computed yet, as the recorder gets it
-            fresh = type(state)(state.n, state.t, state.dt, state.grid_of, state.at_of, state.peak_of)
+            fresh = type(state)(state.n, state.t, state.dt, state.fields)
             assert fresh.peak(s1, s3) == (float(V.flat[k]), node), (state.n, s1)

@@ -148,82 +148,9 @@ class QuasiDynamic:
         F = self.static.traction({c: delta[c].reshape(shape) for c in self.comps})
         return {c: x.ravel() for c, x in F.items()}
 
-    def fields(self, t, y, last):
-        """(grid_of, at_of, peak_of) at (t, y), ``last`` the evaluation there: ``grid_of(name)``
-        the field ``name`` over the grid ({component: field} for "delta", "v", "tau"; a field
-        for "psi" and "V"), ``at_of(name, nodes)`` the field ("delta_3", "psi", ...) at the flat
-        indices ``nodes`` of the grid, ``peak_of(s1, s3)`` (the largest slip rate over the
-        grid's nodes [s1, s3], its node (i, k): the first in the grid's order that has it). On
-        a window each is computed when asked: the creeping region's values are the plate's,
-        its tau needs the grid's transforms."""
-        V, tau, v = last
-        delta, psi = self.split(y)
-        shape = self.grid.shape
-        flat = {"delta": delta, "v": v, "tau": tau, "psi": psi, "V": V}
-
-        def values(name):
-            kind, _, c = name.partition("_")
-            return flat[kind][int(c)] if c else flat[kind]
-        if self.window is None:
-            def grid_of(name):
-                x = flat[name]
-                return {c: a.reshape(shape) for c, a in x.items()} if isinstance(x, dict) else x.reshape(shape)
-
-            def peak_of(s1, s3):
-                Vr = V.reshape(shape)[s1, s3]
-                k = int(np.argmax(Vr))
-                return float(Vr.flat[k]), tuple(int(i) + (sl.start or 0)
-                                                for i, sl in zip(np.unravel_index(k, Vr.shape), (s1, s3)))
-            return grid_of, lambda name, nodes: values(name)[nodes], peak_of
-        pts, N = self.points, int(np.prod(shape))
-        outside = {"delta": lambda c: self.plate[c] * t, "v": lambda c: self.plate[c], "psi": lambda c: 0.0,
-                   "V": lambda c: self.plate_speed}
-
-        def spread(name):
-            kind, _, c = name.partition("_")
-            out = np.full(N, outside[kind](int(c) if c else None))
-            out[pts] = values(name)
-            return out.reshape(shape)
-
-        def grid_of(name):
-            if name == "tau":
-                return tau_grid()
-            if name in ("delta", "v"):
-                return {c: spread(f"{name}_{c}") for c in self.comps}
-            return spread(name)
-
-        def tau_grid():
-            F = self.static.traction(grid_of("delta"))
-            vg = grid_of("v")
-            out = {}
-            for c in self.comps:
-                x = (self._tau0_grid[c].reshape(shape) + F[c] + self.stiffness * self.plate[c] * t).ravel()
-                if self.image is not None:
-                    x = 0.5 * (x + x[self._image_grid])
-                x -= self.eta * vg[c].ravel()
-                x[pts] = tau[c]
-                out[c] = x.reshape(shape)
-            return out
-
-        def at_of(name, nodes):
-            at, on, every = self._places(nodes)
-            if every:                                   # every node on the window
-                return values(name)[at]
-            if name.startswith("tau_"):                 # the creeping region's tau: the grid's
-                return grid_of("tau")[int(name[4:])].ravel()[nodes]
-            kind, _, c = name.partition("_")
-            return np.where(on, values(name)[at], outside.get(kind, lambda c: np.nan)(int(c) if c else None))
-
-        def peak_of(s1, s3):
-            inside, first_out = self._region(s1, s3)
-            m, node = -np.inf, N
-            if inside.size:
-                j = int(np.argmax(V[inside]))
-                m, node = float(V[inside[j]]), int(pts[inside[j]])
-            if first_out >= 0 and (self.plate_speed > m or (self.plate_speed == m and first_out < node)):
-                m, node = self.plate_speed, first_out
-            return m, tuple(int(i) for i in np.unravel_index(node, shape))
-        return grid_of, at_of, peak_of
+    def fields(self, t, y, last) -> "Fields":
+        """The fields at (t, y), ``last`` the evaluation there: :class:`Fields`."""
+        return Fields(self, t, y, last)
 
     def _region(self, s1, s3):
         """(the places among the window's points of the grid's nodes [s1, s3], the first of
@@ -313,6 +240,109 @@ class QuasiDynamic:
         scaled by L + |slip|, that of the state by a (an error of a in psi is a factor e in V);
         integrate.error_norm."""
         return self._L, self._a, self.slides
+
+
+class Fields:
+    """The fields of ``system`` at (t, y), ``last`` its evaluation there, each computed when
+    asked: ``grid_of(name)`` the field over the grid ({component: field} for "delta", "v",
+    "tau"; a field for "psi" and "V"); ``at_of(name, nodes)`` the field ("delta_3", "psi",
+    ...) at the flat indices ``nodes`` of the grid; ``peak_of(s1, s3)`` the largest slip rate
+    over the grid's nodes [s1, s3] and its node (i, k), the first in the grid's order that
+    has it; ``own(name)`` a field at the system's points and ``spread(name, x)`` such a field
+    over the grid. On a window the creeping region's values are the plate's and its tau
+    needs the grid's transforms. (An object, not closures: closures that call each other make
+    a reference cycle at every step, work for the garbage collector.)"""
+
+    __slots__ = ("system", "t", "y", "V", "tau", "v")
+
+    def __init__(self, system, t, y, last):
+        self.system, self.t, self.y = system, t, y
+        self.V, self.tau, self.v = last
+
+    def own(self, name):
+        """The field ``name`` ("delta_3", "psi", "V", or "delta", "v", "tau" as {component:
+        field}) at the system's points."""
+        kind, _, c = name.partition("_")
+        if kind in ("delta", "psi"):
+            delta, psi = self.system.split(self.y)
+            x = delta if kind == "delta" else psi
+        else:
+            x = {"v": self.v, "tau": self.tau, "V": self.V}[kind]
+        return x[int(c)] if c else x
+
+    def _outside(self, name):
+        """The value of the field ``name`` where the plane creeps (NaN: not one value)."""
+        kind, _, c = name.partition("_")
+        sysm = self.system
+        if kind == "delta":
+            return sysm.plate[int(c)] * self.t
+        if kind == "v":
+            return sysm.plate[int(c)]
+        return {"psi": 0.0, "V": sysm.plate_speed}.get(kind, np.nan)
+
+    def spread(self, name, x=None):
+        """The field ``name`` of one value a node (``x`` at the system's points, or over the
+        grid already; None: this point's) over the grid, the plate's values where it creeps."""
+        sysm = self.system
+        shape = sysm.grid.shape
+        x = self.own(name) if x is None else x
+        N = int(np.prod(shape))
+        if sysm.window is None or x.size == N:
+            return x.reshape(shape)
+        out = np.full(N, self._outside(name))
+        out[sysm.points] = x
+        return out.reshape(shape)
+
+    def grid_of(self, name):
+        sysm = self.system
+        if name == "tau" and sysm.window is not None:
+            return self._tau_grid()
+        if name in ("delta", "v", "tau"):
+            return {c: self.spread(f"{name}_{c}") for c in sysm.comps}
+        return self.spread(name)
+
+    def _tau_grid(self):
+        sysm = self.system
+        shape = sysm.grid.shape
+        F = sysm.static.traction(self.grid_of("delta"))
+        vg = self.grid_of("v")
+        out = {}
+        for c in sysm.comps:
+            x = (sysm._tau0_grid[c].reshape(shape) + F[c] + sysm.stiffness * sysm.plate[c] * self.t).ravel()
+            if sysm.image is not None:
+                x = 0.5 * (x + x[sysm._image_grid])
+            x -= sysm.eta * vg[c].ravel()
+            x[sysm.points] = self.tau[c]
+            out[c] = x.reshape(shape)
+        return out
+
+    def at_of(self, name, nodes):
+        sysm = self.system
+        if sysm.window is None:
+            return self.own(name)[nodes]
+        at, on, every = sysm._places(nodes)
+        if every:                                   # every node on the window
+            return self.own(name)[at]
+        if name.startswith("tau_"):                 # the creeping region's tau: the grid's
+            return self._tau_grid()[int(name[4:])].ravel()[nodes]
+        return np.where(on, self.own(name)[at], self._outside(name))
+
+    def peak_of(self, s1, s3):
+        sysm = self.system
+        shape = sysm.grid.shape
+        if sysm.window is None:
+            Vr = self.V.reshape(shape)[s1, s3]
+            k = int(np.argmax(Vr))
+            return float(Vr.flat[k]), tuple(int(i) + (sl.start or 0)
+                                            for i, sl in zip(np.unravel_index(k, Vr.shape), (s1, s3)))
+        inside, first_out = sysm._region(s1, s3)
+        m, node = -np.inf, int(np.prod(shape))
+        if inside.size:
+            j = int(np.argmax(self.V[inside]))
+            m, node = float(self.V[inside[j]]), int(sysm.points[inside[j]])
+        if first_out >= 0 and (sysm.plate_speed > m or (sysm.plate_speed == m and first_out < node)):
+            m, node = sysm.plate_speed, first_out
+        return m, tuple(int(i) for i in np.unravel_index(node, shape))
 
 
 def _locate(points, nodes):

@@ -5,8 +5,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Callable
-
 import numpy as np
 
 from .control import StepControl
@@ -21,36 +19,35 @@ from .quasi_dynamic import QuasiDynamic
 class SequenceState:
     """After accepted step ``n`` (time ``t``, reached by a step ``dt``): the fields over the
     grid, {component: array} for ``delta``, ``v``, ``tau``; ``psi`` and the slip rate
-    magnitude ``V``, each computed when first asked (``grid_of``: name -> field, from the
-    system's ``fields``); :meth:`at` reads a field at a few nodes without it (``at_of``),
-    :meth:`peak` the largest slip rate and its node (``peak_of``)."""
+    magnitude ``V``, each computed when first asked from ``fields`` (the system's
+    ``Fields`` at this point, quasi_dynamic.py); :meth:`at` reads a field at a few nodes
+    without it, :meth:`peak` the largest slip rate and its node, :meth:`largest` and
+    :meth:`spread` keep a running maximum of the slip rate at the system's points."""
 
     n: int
     t: float
     dt: float
-    grid_of: Callable = field(repr=False)
-    at_of: Callable = field(repr=False)
-    peak_of: Callable = field(repr=False)
+    fields: object = field(repr=False)
 
     @cached_property
     def delta(self) -> dict:
-        return self.grid_of("delta")
+        return self.fields.grid_of("delta")
 
     @cached_property
     def v(self) -> dict:
-        return self.grid_of("v")
+        return self.fields.grid_of("v")
 
     @cached_property
     def tau(self) -> dict:
-        return self.grid_of("tau")
+        return self.fields.grid_of("tau")
 
     @cached_property
     def psi(self) -> np.ndarray:
-        return self.grid_of("psi")
+        return self.fields.grid_of("psi")
 
     @cached_property
     def V(self) -> np.ndarray:
-        return self.grid_of("V")
+        return self.fields.grid_of("V")
 
     def at(self, name: str, nodes) -> np.ndarray:
         """The field ``name`` ("delta_3", "v_1", "tau_3", "psi" or "V") at the flat indices
@@ -59,12 +56,23 @@ class SequenceState:
         if kind in self.__dict__:           # the field over the grid is there already
             x = self.__dict__[kind]
             return (x[int(c)] if c else x).ravel()[nodes]
-        return self.at_of(name, nodes)
+        return self.fields.at_of(name, nodes)
 
     def peak(self, s1, s3) -> tuple:
         """(the largest slip rate over the grid's nodes [s1, s3], its node (i, k)), the first
         node in the grid's order that has it; without the field over the grid."""
-        return self.peak_of(s1, s3)
+        return self.fields.peak_of(s1, s3)
+
+    def largest(self, most=None) -> np.ndarray:
+        """``most`` (the largest slip rate so far at each of the system's points; None: a new
+        array) raised to this state's slip rate, in place; :meth:`spread` puts it on the grid."""
+        V = self.fields.own("V")
+        return V.copy() if most is None else np.maximum(most, V, out=most)
+
+    def spread(self, name: str, x) -> np.ndarray:
+        """``x``, the field ``name`` at the system's points (or over the grid already), over the
+        grid: the plate's values where the plane creeps outside them."""
+        return self.fields.spread(name, np.asarray(x, dtype=float))
 
 
 def system_of(scene, transforms=None) -> QuasiDynamic:
@@ -141,7 +149,7 @@ class SequenceRun:
         sysm = self.system
         if sysm.last is None:
             sysm.rates(self.t, self.y)
-        return SequenceState(self.n, self.t, dt, *sysm.fields(self.t, self.y, sysm.last))
+        return SequenceState(self.n, self.t, dt, sysm.fields(self.t, self.y, sysm.last))
 
     def __iter__(self):
         if self.n == 0:

@@ -166,6 +166,10 @@ class WindowedStatic:
 def _into_box(values, to_box, shift, box):
     """box (row-major cells) = values[to_box] - shift."""
     m = box.shape[1]
+    if m == 1:                  # a line (the plane problem): no division per cell
+        for p in range(to_box.size):
+            box[p, 0] = values[to_box[p]] - shift
+        return
     for p in range(to_box.size):
         box[p // m, p % m] = values[to_box[p]] - shift
 
@@ -174,6 +178,10 @@ def _into_box(values, to_box, shift, box):
 def _out_of_box(box, from_box, out):
     """out[q] = the cell from_box[q] of box (row-major)."""
     m = box.shape[1]
+    if m == 1:
+        for q in range(from_box.size):
+            out[q] = box[from_box[q], 0]
+        return
     for q in range(from_box.size):
         f = from_box[q]
         out[q] = box[f // m, f % m]
