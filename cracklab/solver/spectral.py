@@ -137,6 +137,17 @@ def _wisdom_lock():
         fh.close()  # releases the lock
 
 
+@contextlib.contextmanager
+def host_wisdom():
+    """Plans made inside take the host's wisdom and add theirs to it, one process at a time
+    (``_wisdom_lock``, ``_load_wisdom``, ``_save_wisdom``): the same plan, and the same numbers
+    to the bit, in a run and in its resumption in another process."""
+    with _wisdom_lock():
+        _load_wisdom()
+        yield
+        _save_wisdom()
+
+
 #: the components odd about a free surface (delta_3, v_3, tau_3); the others are even
 ODD = (3,)
 
@@ -167,10 +178,8 @@ class Transforms:
             self._plan()
 
     def _plan(self):
-        with _wisdom_lock():
-            _load_wisdom()
+        with host_wisdom():
             self._make_plans()
-            _save_wisdom()
 
     def _make_plans(self):
         n1, n3 = self.shape

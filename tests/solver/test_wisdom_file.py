@@ -87,3 +87,38 @@ def test_a_fifo_in_place_of_the_wisdom_file_does_not_hang(tmp_path):
     for suffix in ("json", "pickle"):
         os.mkfifo(cache / f"fftw-wisdom-{socket.gethostname()}.{suffix}")
     _transform_in_child(cache, tmp_path)
+
+
+def test_the_sequence_window_plans_from_and_into_the_host_wisdom(tmp_path):
+    """A quasi-dynamic sequence's window (solver/sequence/window.py) plans its padded box with
+    the host's wisdom: after one process planned it, another can plan that box from the file
+    alone (FFTW_WISDOM_ONLY fails without wisdom of the size), so a resumed run transforms
+    with the plan of the run it resumes."""
+    cache = tmp_path / "cache"
+    env = dict(os.environ, CRACKLAB_CACHE=str(cache), CRACKLAB_FFT="pyfftw")
+    plan = textwrap.dedent("""
+        import sys
+        import numpy as np
+        from cracklab.scenes import bp1
+        from cracklab.solver.sequence.run import system_of
+        s = system_of(bp1(dz=400.0, years=1.0))
+        w = s.window
+        assert w is not None and w.fftw
+        w.traction({3: np.zeros(s.n)})
+        print(w.size[0])
+    """)
+    size = int(subprocess.run([sys.executable, "-c", plan], env=env, cwd=tmp_path, capture_output=True, text=True,
+                              timeout=120, check=True).stdout.split()[-1])
+    only = textwrap.dedent(f"""
+        import pyfftw
+        from cracklab.solver import spectral
+        spectral._load_wisdom()
+        a = pyfftw.empty_aligned(({size}, 1), dtype="float64")
+        b = pyfftw.empty_aligned(({size} // 2 + 1, 1), dtype="complex128")
+        pyfftw.FFTW(a, b, axes=(0,), flags=("FFTW_MEASURE", "FFTW_WISDOM_ONLY"))
+        pyfftw.FFTW(b.copy(), a.copy(), axes=(0,), direction="FFTW_BACKWARD", flags=("FFTW_MEASURE", "FFTW_WISDOM_ONLY"))
+        print("ok")
+    """)
+    out = subprocess.run([sys.executable, "-c", only], env=env, cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0 and out.stdout.strip() == "ok", out.stderr[-2000:]

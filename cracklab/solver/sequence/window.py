@@ -18,7 +18,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from ...jit import njit
-from ..spectral import backend_name, pyfftw
+from ..spectral import backend_name, host_wisdom, pyfftw
 
 
 def periodic_box(mask_1d) -> tuple[int, int]:
@@ -149,14 +149,16 @@ class WindowedStatic:
         return sfft.rfftn(box, s=self.size, axes=self.fft_axes)
 
     def _plan(self):
-        """FFTW's plans of the padded box (a real-to-complex plan leaves its input alone)."""
+        """FFTW's plans of the padded box (a real-to-complex plan leaves its input alone), from
+        and into the host's wisdom: a resumed run transforms as the run it resumes."""
         flags, axes = ("FFTW_MEASURE",), self.fft_axes
         spec_shape = self.kernels[self.comps[0], self.comps[0]].shape
-        fwd = pyfftw.FFTW(pyfftw.empty_aligned(self.size, dtype="float64"),
-                          pyfftw.empty_aligned(spec_shape, dtype="complex128"), axes=axes, flags=flags)
-        inv = pyfftw.FFTW(pyfftw.empty_aligned(spec_shape, dtype="complex128"),
-                          pyfftw.empty_aligned(self.size, dtype="float64"), axes=axes,
-                          direction="FFTW_BACKWARD", flags=flags)
+        with host_wisdom():
+            fwd = pyfftw.FFTW(pyfftw.empty_aligned(self.size, dtype="float64"),
+                              pyfftw.empty_aligned(spec_shape, dtype="complex128"), axes=axes, flags=flags)
+            inv = pyfftw.FFTW(pyfftw.empty_aligned(spec_shape, dtype="complex128"),
+                              pyfftw.empty_aligned(self.size, dtype="float64"), axes=axes,
+                              direction="FFTW_BACKWARD", flags=flags)
         fwd.input_array[...] = 0.0          # planning wrote into it; the padding stays zero from here
         self._plans = (fwd, inv)
         return self._plans
