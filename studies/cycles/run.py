@@ -562,8 +562,8 @@ def _stiff_clause(st) -> str:
             f"{abs(bs3['event_start_error_yr']):.1e} years from {PAIR_TITLES[ref['method']]} at "
             f"{_tol(ref['tolerance'])}; its steps are a median {stab['event']['median']:.2f} of its stability "
             f"limit in the event and {stab['between']['median']:.2f} between events (the eigenvalues of the "
-            f"Jacobian at {stab['event']['samples']} and {stab['between']['samples']} steps): at this grid accuracy, "
-            "not stability, sets them. Radau IIA of order 5 (stiffly stable; scipy's, with the Jacobian through "
+            f"Jacobian at {stab['event']['samples']} and {stab['between']['samples']} steps): on this grid accuracy, "
+            "not stability, sets them in the event. Radau IIA of order 5 (stiffly stable; scipy's, with the Jacobian through "
             "the static response) takes "
             + ", ".join(f"{r['steps']} steps at {_tol(r['tolerance'])} (the event {off[r['tolerance']]:.1e} years "
                         "off)" for r in rad)
@@ -596,9 +596,10 @@ def _peak_steps(r, dz) -> str:
             f"{1e3 * med:.1f} ms: on the modes the radiation damping dominates the rate is up to pi c_s / dz, and "
             f"{PAIR_TITLES[pair.name]} is stable to h lambda = {reach:.2f} on the negative axis, so to {reach:.2f} "
             f"dz / (pi c_s) = {1e3 * limit:.1f} ms: "
-            + ("the pair's stability sets the steps at the events' peak, and a stiffly stable step of the same order "
-               "would take longer ones there" if near and med / limit >= 1.0 else
-               "about as long as the pair's stability allows, so accuracy and stability meet there" if near else
+            + ("about as long as the pair's stability allows on those modes (the rate-and-state term adds to the "
+               "damping where the slip rate is lower), so accuracy and stability meet there" if near else
+               "longer than the pair's stability allows on those modes: the slip rates there are too low for "
+               "the radiation damping to dominate" if med > limit else
                "shorter than the pair's stability allows, so its accuracy sets them"))
 
 
