@@ -258,7 +258,7 @@ def _sequence_memory(scene, store) -> MemoryEstimate:
     nsnap, rows = scene.sequence.expected_rows(scene)
     one = n1r * n3r * 8 * len(rec.fields)          # a snapshot's bytes
     kept = min(nsnap, SEQUENCE_SNAPSHOT_BYTES // max(one, 1) + 1) if store else nsnap
-    snapshots = kept * one
+    snapshots = 2 * kept * one                      # and their stacked copy while they are written
     series = min(rows, SEQUENCE_ROWS if store else rows) * (len(rec.stations or {}) * (3 * nc + 1) + 5) * 8 * 2
     return MemoryEstimate(int(history), int(work), int(snapshots + series), int(rows))
 
