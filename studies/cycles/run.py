@@ -603,11 +603,13 @@ def _peak_steps(r, dz) -> str:
                "shorter than the pair's stability allows, so its accuracy sets them"))
 
 
-def write_page(res, dzs, page, figs, command):
+def write_page(res, dzs, page, figs, command, kept_figs=()):
     runs = res["runs"]
-    lines = ["# Sequences: SEAS BP1-QD and BP1-FD" if res.get("fd") else "# Sequences: SEAS BP1-QD", "",
+    fd = res.get("fd") or res.get("fd_kept")
+    lines = ["# Sequences: SEAS BP1-QD and BP1-FD" if fd else "# Sequences: SEAS BP1-QD", "",
              f"Written by `{command}` (studies/cycles/run.py) from its runs; every number below is in "
-             "OUT/cycles_results.json.", "",
+             "OUT/cycles_results.json" + (", but for the section on BP1-FD and its figures, kept as the page had "
+                                          "them (their runs are not in OUT)." if res.get("fd_kept") else "."), "",
              "SEAS BP1-QD (Erickson et al. 2020, Seismol. Res. Lett. 91): a vertical strike-slip fault in a half "
              "space, antiplane, rate-and-state friction with the ageing law, velocity weakening to 15 km, the "
              "transition to velocity strengthening over 3 km, friction to 40 km and creep at the plate rate "
@@ -693,6 +695,8 @@ def write_page(res, dzs, page, figs, command):
               "ruptures stopped at depth and started again at the surface.", ""]
     if res.get("fd"):
         lines += _fd_section(res)
+    elif res.get("fd_kept"):
+        lines += res["fd_kept"]
     if res.get("uguca"):
         from studies.cycles.uguca import section
         lines += section(res["uguca"])
@@ -714,7 +718,7 @@ def write_page(res, dzs, page, figs, command):
                          f"{len(m['earthquakes_yr'])} | {m['earthquakes_yr'][0]:.1f} | {rec} | "
                          f"{m['peak_slip_rate']:.2f} | {m['mean_slip']:.2f} |")
         lines.append("")
-    lines += ["## Figures", ""] + [f"![{Path(f).stem}]({f})" for f in figs] + [""]
+    lines += ["## Figures", ""] + [f"![{Path(f).stem}]({f})" for f in figs] + list(kept_figs) + [""]
     page.write_text("\n".join(lines))
 
 
@@ -729,6 +733,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true")
     p.add_argument("--ensemble", default=None, help="the store of `cracklab sweep studies/cycles/ensemble.toml`, "
                                                     "for the page's section on it")
+    p.add_argument("--keep-fd", action="store_true", help="without --fd: the page's BP1-FD section and figures "
+                                                              "kept as they are")
     p.add_argument("--page", default=str(ROOT / "docs" / "studies" / "cycles.md"))
     p.add_argument("--figures", default=str(ROOT / "docs" / "figures"))
     args = p.parse_args(argv)
@@ -750,6 +756,11 @@ def main(argv=None) -> int:
         res["uguca"] = json.loads((out / "uguca_bp1.json").read_text())
     elif Path(args.page).exists():      # uguca's runs are not in OUT: their section as the page has it
         res["uguca_kept"] = kept_section(Path(args.page).read_text(), "## Against uguca")
+    kept_figs = []
+    if args.keep_fd and not args.fd and Path(args.page).exists():      # BP1-FD's runs not in OUT
+        text = Path(args.page).read_text()
+        res["fd_kept"] = kept_section(text, "## BP1-FD: the fully dynamic response")
+        kept_figs = [line for line in kept_section(text, "## Figures") if "bp1fd_" in line or "_qd_fd_" in line]
     if (out / "qd_tolerance.json").exists():    # python -m studies.cycles.tolerance
         res["qd_tolerance"] = json.loads((out / "qd_tolerance.json").read_text())
     if (out / "fd_checks.json").exists():       # python -m studies.cycles.fd_checks
@@ -768,7 +779,7 @@ def main(argv=None) -> int:
         [fig_qd_fd(out, dz, figdir) for dz in args.fd if store_of(out, dz).exists()] + \
         [fig_profiles(out, dz, figdir, dynamic=True) for dz in args.fd]
     rel = [Path("..") / "figures" / f.name for f in figs]
-    write_page(res, args.dz, page, rel, "python -m studies.cycles.run " + " ".join(argv or sys.argv[1:]))
+    write_page(res, args.dz, page, rel, "python -m studies.cycles.run " + " ".join(argv or sys.argv[1:]), kept_figs)
     print(f"wrote {page}")
     return 0
 
