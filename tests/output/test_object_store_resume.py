@@ -7,6 +7,7 @@ used, nor one whose bytes do not match their pointer."""
 import importlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -240,7 +241,10 @@ def test_sigkill_of_cracklab_run_into_s3_then_resume(s3_env, tmp_path):
     proc = _start(toml, url, "--checkpoint-every", "100")
     _, err = proc.communicate(timeout=300)
     assert proc.returncode == 0, err.decode()[-2000:]
-    assert f"resumed from step {last}" in err.decode(), err.decode()
+    # the attr follows the checkpoint (output/simulate.py: informational): a kill between
+    # the two leaves it one checkpoint behind the checkpoint the run resumes from
+    resumed = re.search(r"resumed from step (\d+)", err.decode())
+    assert resumed and int(resumed.group(1)) in (last, last + 100), err.decode()
     assert_same(xr.open_zarr(ref_url, consolidated=False).load(), xr.open_zarr(url, consolidated=False).load())
 
 
