@@ -312,9 +312,10 @@ class SequenceRecorder:
                     ds = ds.assign_coords(**self.station_coords())
                 enc = checkpoint.encoding(ds)
                 for name, var in ds.variables.items():
-                    if dim in var.dims:     # a snapshot per chunk of a field; series in long chunks (a
-                        # chunk per row would make reading t back cost memory in proportion to the run)
-                        along = 1 if dim == "t" and var.ndim > 1 else CHUNK
+                    if dim in var.dims:     # snapshots about SNAPSHOT_CHUNK_BYTES a chunk of a field;
+                        # series in long chunks (a chunk per row would make reading t back cost memory
+                        # in proportion to the run)
+                        along = snapshots_per_chunk(var) if dim == "t" and var.ndim > 1 else CHUNK
                         enc[name]["chunks"] = tuple(along if d == dim else ds.sizes[d] for d in var.dims)
                 _write(ds, self.path, mode="w" if first_ever else "a", encoding=enc)
             else:
@@ -390,6 +391,16 @@ class SequenceRecorder:
 
 #: rows per chunk of the t_station variables of a store
 CHUNK = 4096
+#: bytes of a chunk of a recorded field's snapshots (at least one snapshot a chunk): a chunk
+#: costs about a millisecond to write whatever its size up to about this, and a flush that
+#: ends inside a chunk rewrites it whole with the next (zarr writes a chunk atomically)
+SNAPSHOT_CHUNK_BYTES = 1 << 20
+
+
+def snapshots_per_chunk(var) -> int:
+    """Snapshots along t in a chunk of the recorded field ``var`` (t, x1, x3)."""
+    one = var.dtype.itemsize * int(np.prod(var.shape[1:]))
+    return max(1, SNAPSHOT_CHUNK_BYTES // max(one, 1))
 
 
 def _zarr(path):
