@@ -71,14 +71,20 @@ def _step(scene, system, y, repeats):
     and the error's norm (integrate.error_norm)."""
     from types import SimpleNamespace
 
-    from cracklab.solver.sequence.integrate import error_norm, tableau, try_step
+    from cracklab.solver.sequence.integrate import error_norm, tableau, try_step, weighted
 
     pair = _pair(scene)
     A, b, e = tableau(pair)
     f = system.rates(3.15e7, y)
     k = np.empty((pair.stages, y.size))
     k[0] = f
-    free = SimpleNamespace(rates=lambda t, yi: f, stage=lambda dt, k, c: None)
+
+    def stage_rates(t, y, h, w, k, i):
+        yi = weighted(y, h, w, k)
+        k[i] = f
+        return yi
+
+    free = SimpleNamespace(rates=lambda t, yi: f, stage=lambda dt, k, c: None, stage_rates=stage_rates)
     sums = _best(lambda: try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0), repeats)
     y_new, err, _ = try_step(free, pair, A, b, e, k, 3.15e7, y, 1.0)
     norm = _best(lambda: error_norm(system, y_new, err, scene.sequence.tolerance), repeats)

@@ -63,11 +63,15 @@ class Problem:
             self.K[:, j] = s.traction(0.0, y)[self.c] - base
             y[j] = 0.0
         self.evaluations = 0
-        self._rates = s.rates
+        self._rates, self._stage_rates = s.rates, s.stage_rates
 
     def rates(self, t, y):
         self.evaluations += 1
         return self._rates(t, y)
+
+    def stage_rates(self, t, y, h, w, k, i):
+        self.evaluations += 1
+        return self._stage_rates(t, y, h, w, k, i)
 
     def jacobian(self, t, y):
         s, n, c = self.system, self.n, self.c
@@ -113,7 +117,7 @@ def explicit(dz, years, tolerance=None, after_event=None, keep=False):
     s, seq = p.system, p.scene.sequence
     dt_min, dt_max, dt_first = steps_of(p.scene)
     control = StepControl(tolerance=seq.tolerance, dt_min=dt_min, dt_max=dt_max, dt_first=dt_first)
-    s.rates = p.rates
+    s.rates, s.stage_rates = p.rates, p.stage_rates
     y0 = s.initial()
     prev = (0.0, p.vmax(0.0, y0))
     start = end = None

@@ -120,18 +120,17 @@ def try_step(system, pair, A, b, e, k, t, y, h):
     before its rates."""
     try:
         for i in range(1, pair.stages):
-            yi = _weighted(y, h, A[i], k)
             system.stage(pair.c[i] * h, k[:i], pair.c[:i + 1])
-            k[i] = system.rates(t + pair.c[i] * h, yi)
-        y_new = yi if pair.fsal else _weighted(y, h, b, k)
-        err = _weighted(None, h, e, k)
+            yi = system.stage_rates(t + pair.c[i] * h, y, h, A[i], k, i)
+        y_new = yi if pair.fsal else weighted(y, h, b, k)
+        err = weighted(None, h, e, k)
     except (SimulationError, FloatingPointError):
         return y, np.full_like(y, np.nan), False
     return y_new, err, bool(np.all(np.isfinite(y_new)))
 
 
 @njit()
-def _weighted(y, h, w, k):
+def weighted(y, h, w, k):
     """y + h sum_l w_l k_l (a new array; without y when it is None): a stage's unknowns or
     the error estimate, from the stages' rates (the rows of k, the first w.size of them)."""
     n = k.shape[1]

@@ -15,9 +15,10 @@ import numpy as np
 
 from ...errors import InputError
 from ...jit import njit
+from .integrate import weighted
 from .mirror import mirror_index
 from .static import StaticResponse
-from .window import WindowedStatic
+from .window import WindowedStatic, _into_box
 
 
 class QuasiDynamic:
@@ -104,6 +105,9 @@ class QuasiDynamic:
         self._image_at = np.zeros(0, np.int64) if self.image is None else self.image.astype(np.int64)
         self._sigma_solved = self.sigma_s if self._half is None else self._sigma_half
         self._kept_places = self._kept_region = None
+        # one component on a window with FFTW: a stage's sums, the window's box, the traction
+        # and the rates go through compiled passes and the window's plans (``stage_rates``)
+        self._fused = self.window is not None and self.window.fftw and len(comps) == 1
         self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
 
@@ -182,6 +186,19 @@ class QuasiDynamic:
         (``rates``, a row each) and ``c`` = (c_0 .. c_i): nothing for the static response
         (dynamic.py prepares its history here)."""
 
+    def stage_rates(self, t, y, h, w, k, i):
+        """The unknowns of a stage, y + h sum_l w_l k_l (the rows of ``k``, the first
+        ``w.size`` of them), and their rates at time ``t`` into ``k[i]``: ``rates`` of them
+        (one component on a window: its arithmetic in fewer passes, the same numbers)."""
+        if type(self) is not QuasiDynamic or not self._fused:
+            yi = weighted(y, h, w, k)
+            k[i] = self.rates(t, yi)
+            return yi
+        win, n, c = self.window, self.n, self.comps[0]
+        yi = _stage_into_box(y, h, w, k, win.to_box, self.plate[c] * t, win.box_in())
+        self._evaluate_one(t, yi, win.convolve_one(), k[i])
+        return yi
+
     def rates(self, t, y):
         """dy/dt at (t, y); keeps (V, tau, v) of the evaluation in ``last``."""
         if len(self.comps) == 1:
@@ -221,14 +238,37 @@ class QuasiDynamic:
         """``rates`` of one slipping component: the traction gathered at the points solved
         (a node and its image once) and the solve's rates scattered back, compiled."""
         n, c = self.n, self.comps[0]
+        if self._fused:
+            _into_box(y[:n], self.window.to_box, self.plate[c] * t, self.window.box_in())
+            dy = np.empty_like(y)
+            self._evaluate_one(t, y, self.window.convolve_one(), dy)
+            return dy
         F = self.elastic({c: y[:n]}, t)[c]
         tau = np.empty(n)
         T = np.empty(self._solve_at.size)
         psi = np.empty(self._solve_at.size)
         _gather(self.tau0[c], F, self.stiffness * self.plate[c] * t, self._image_at, self._slid, self._solve_at,
                 y[n:], tau, T, psi)
+        return self._solve_one(t, tau, T, psi, np.zeros_like(y))
+
+    def _evaluate_one(self, t, y, box, dy):
+        """The rates at (t, y) into ``dy``, the static traction of y's slip on the window's
+        ``box`` (:meth:`WindowedStatic.convolve_one`): ``_rates_one``'s numbers."""
+        c = self.comps[0]
+        tau = np.empty(self.n)
+        T = np.empty(self._solve_at.size)
+        psi = np.empty(self._solve_at.size)
+        spring = self.stiffness * self.plate[c] * t
+        _gather_box(box, self.window.from_box, spring if self.stiffness else 0.0, self.tau0[c], spring,
+                    self._image_at, self._slid, self._solve_at, y[self.n:], tau, T, psi)
+        dy[:] = 0.0
+        return self._solve_one(t, tau, T, psi, dy)
+
+    def _solve_one(self, t, tau, T, psi, dy):
+        """The solve at the points solved (``T``: |tau| there, ``psi``) and its rates scattered
+        into ``dy`` (zero where they are not set); ``tau`` less the radiation damping."""
+        n, c = self.n, self.comps[0]
         Vh, self.lnV, dph = self.law.slide_rates(T, psi, self._sigma_solved, self.eta, guess=self.lnV, at=self.at)
-        dy = np.zeros_like(y)
         V = np.zeros(n)
         _scatter(tau, self._slid, self._solve_of, Vh, dph, self._creep_at, self.plate[c], self.plate_speed, self.eta,
                  dy[:n], dy[n:], V)
@@ -336,13 +376,12 @@ class Fields:
             return float(Vr.flat[k]), tuple(int(i) + (sl.start or 0)
                                             for i, sl in zip(np.unravel_index(k, Vr.shape), (s1, s3)))
         inside, first_out = sysm._region(s1, s3)
-        m, node = -np.inf, int(np.prod(shape))
+        m, node = -np.inf, shape[0] * shape[1]
         if inside.size:
-            j = int(np.argmax(self.V[inside]))
-            m, node = float(self.V[inside[j]]), int(sysm.points[inside[j]])
+            m, node = _largest_at(self.V, inside, sysm.points)
         if first_out >= 0 and (sysm.plate_speed > m or (sysm.plate_speed == m and first_out < node)):
             m, node = sysm.plate_speed, first_out
-        return m, tuple(int(i) for i in np.unravel_index(node, shape))
+        return float(m), divmod(int(node), shape[1])
 
 
 def _locate(points, nodes):
@@ -352,11 +391,33 @@ def _locate(points, nodes):
 
 
 @njit()
+def _largest_at(V, inside, points):
+    """(the largest of V[inside], points[] of its place): the first largest, as numpy's
+    argmax (the first NaN when there is one)."""
+    j = 0
+    m = V[inside[0]]
+    for q in range(inside.size):
+        x = V[inside[q]]
+        if x != x:
+            return x, points[inside[q]]
+        if x > m:
+            m, j = x, q
+    return m, points[inside[j]]
+
+
+@njit()
 def _gather(tau0, F, shift, image, slid, solve_at, psi, tau, T, psi_solved):
     """tau = tau0 + F + shift (made even about the ``image`` of each point when given), and
     at the points solved (``slid[solve_at]``) |tau| into T and psi into psi_solved."""
     for i in range(tau.size):
         tau[i] = tau0[i] + F[i] + shift
+    _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved)
+
+
+@njit()
+def _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved):
+    """tau made even about the ``image`` of each point (when given), and at the points solved
+    (``slid[solve_at]``) |tau| into T and psi into psi_solved."""
     if image.size:
         for i in range(tau.size):
             j = image[i]
@@ -370,6 +431,30 @@ def _gather(tau0, F, shift, image, slid, solve_at, psi, tau, T, psi_solved):
         i = slid[solve_at[k]]
         T[k] = abs(tau[i])
         psi_solved[k] = psi[i]
+
+
+@njit()
+def _stage_into_box(y, h, w, k, to_box, shift, box):
+    """A stage's unknowns y + h sum_l w_l k_l (integrate.weighted), and their slip less
+    ``shift`` into the window's ``box`` (window._into_box); returns the unknowns."""
+    yi = weighted(y, h, w, k)
+    _into_box(yi, to_box, shift, box)
+    return yi
+
+
+@njit()
+def _gather_box(box, from_box, spring_out, tau0, spring, image, slid, solve_at, psi, tau, T, psi_solved):
+    """_gather of the static traction on the window's ``box`` (the cell ``from_box[i]`` of
+    each point i), less ``spring_out`` (the spring's load the window's response leaves out:
+    QuasiDynamic.elastic) when it is not zero."""
+    m = box.shape[1]
+    for i in range(tau.size):
+        f = from_box[i]
+        F = box[f // m, f % m] if m > 1 else box[f, 0]
+        if spring_out != 0.0:
+            F = F - spring_out
+        tau[i] = tau0[i] + F + spring
+    _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved)
 
 
 @njit()

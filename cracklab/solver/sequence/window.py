@@ -110,16 +110,27 @@ class WindowedStatic:
         return out
 
     def _traction_one(self, slip, shift):
+        _into_box(slip, self.to_box, shift, self.box_in())
+        out = np.empty(self.points.size)
+        _out_of_box(self.convolve_one(), self.from_box, out)
+        return out
+
+    def box_in(self):
+        """The window's box in the FFTW plan's input (one component with FFTW): the slip of
+        its cells (row-major; ``to_box``: the place among ``points`` of each cell), the
+        padding zero."""
+        fwd, _ = self._plans or self._plan()
+        return fwd.input_array[:self.box[0], :self.box[1]]
+
+    def convolve_one(self):
+        """The static traction of the slip in :meth:`box_in` on the box's cells (row-major;
+        ``from_box``: the cell of each of ``points``), a view of the plan's output."""
         fwd, inv = self._plans or self._plan()
-        b0, b1 = self.box
-        _into_box(slip, self.to_box, shift, fwd.input_array[:b0, :b1])
         fwd.execute()
         c = self.comps[0]
         np.multiply(self.kernels[c, c], fwd.output_array, out=inv.input_array)
         inv.execute()
-        out = np.empty(self.points.size)
-        _out_of_box(inv.output_array[:b0, :b1], self.from_box, out)
-        return out
+        return inv.output_array[:self.box[0], :self.box[1]]
 
     def _forward(self, box):
         """The spectrum of ``box`` padded with zeros to ``size``."""
