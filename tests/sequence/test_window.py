@@ -188,3 +188,43 @@ def test_the_largest_slip_rate_read_on_the_window_is_the_grids():
             # a state whose field over the grid is not computed yet, as the recorder gets it
             fresh = type(state)(state.n, state.t, state.dt, state.fields)
             assert fresh.peak(s1, s3) == (float(V.flat[k]), node), (state.n, s1)
+
+
+@pytest.mark.parametrize("stiffness", [0.0, 2e6])
+def test_a_stage_on_the_window_is_the_stage_sum_and_the_rates_bit_for_bit(stiffness):
+    """``QuasiDynamic.stage_rates`` on a window with FFTW (the stage's sums into the window's
+    box, the traction gathered out of it) gives the unknowns and rates of the general path
+    (integrate.weighted, then ``rates`` through ``elastic``) bit for bit; with a spring too."""
+    from cracklab.scenes import bp1
+    from cracklab.solver.sequence.integrate import weighted
+    from cracklab.solver.sequence.quasi_dynamic import QuasiDynamic
+    from cracklab.solver.sequence.run import components_of
+
+    scene = bp1(dz=200.0, years=50.0, depth=160e3)
+    seq, comps = scene.sequence, components_of(scene)
+    systems = [QuasiDynamic(scene.material, scene.grid, scene.law, {c: scene.loading.field(c) for c in comps},
+                            scene.law.sigma_n, {3: seq.plate_rate_3}, creep=seq.creep, stiffness=stiffness,
+                            mirror=seq.mirror, window=True) for _ in range(2)]
+    fused, plain = systems
+    assert fused._fused and fused.window is not None
+    plain._fused = False
+    rng = np.random.default_rng(5)
+    y = fused.initial()
+    n = fused.n
+    y[:n] = rng.uniform(0.0, 0.2, n)[np.minimum(np.arange(n), fused.image)]      # even about the mirror
+    k = np.empty((4, y.size))
+    k[0] = plain.rates(3e9, y)
+    k[1], k[2] = k[0] * 1.01, k[0] * 0.98
+    t, h, w = 3e9 + 2e5, 4e5, np.array([0.2, 0.3, 0.25])
+    for s in systems:
+        s.lnV = plain.lnV.copy()
+    kf, kp = k.copy(), k.copy()
+    yf = fused.stage_rates(t, y, h, w, kf, 3)
+    yp = weighted(y, h, w, kp)
+    kp[3] = plain.rates(t, yp)
+    assert np.array_equal(yf, yp) and np.array_equal(kf, kp)
+    assert np.array_equal(fused.lnV, plain.lnV)
+    for a, b in zip(fused.last, plain.last):
+        a, b = (a, b) if isinstance(a, np.ndarray) else (a[3], b[3])
+        assert np.array_equal(a, b)
+    assert np.any(kf[3] != k[0])          # the stage moved the rates
