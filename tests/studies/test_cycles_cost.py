@@ -17,7 +17,7 @@ def test_the_cost_breakdown_runs_and_its_parts_add_up():
 
 def test_the_pairs_reach_along_the_negative_axis_is_their_stability_polynomials():
     """The cycles page's stability limit of the steps in events (run.real_stability, from the
-    tableau) against the stability polynomial of each pair, found independently: any
+    tableau's stability polynomial) against the stability polynomial of each pair, found independently: any
     three-stage pair of order 3 has R(z) = 1 + z + z^2/2 + z^3/6 (Bogacki-Shampine, 2.5127),
     Dormand-Prince 5(4)'s six stages add z^6/600 to the Taylor series to z^5 (3.3066;
     Hairer & Wanner, Solving ODEs II, IV.2)."""
