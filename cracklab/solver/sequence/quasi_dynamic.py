@@ -18,7 +18,7 @@ from ...jit import njit
 from .integrate import weighted
 from .mirror import mirror_index
 from .static import StaticResponse
-from .window import WindowedStatic, _into_box
+from .window import WindowedStatic, into_box
 
 
 class QuasiDynamic:
@@ -105,8 +105,9 @@ class QuasiDynamic:
         self._image_at = np.zeros(0, np.int64) if self.image is None else self.image.astype(np.int64)
         self._sigma_solved = self.sigma_s if self._half is None else self._sigma_half
         self._kept_places = self._kept_region = None
-        # one component on a window with FFTW: a stage's sums, the window's box, the traction
-        # and the rates go through compiled passes and the window's plans (``stage_rates``)
+        # one component on a window with FFTW (the static response: a system of dynamic.py has
+        # no window): a stage's sums, the window's box, the traction and the rates go through
+        # compiled passes and the window's plans (``stage_rates``)
         self._fused = self.window is not None and self.window.fftw and len(comps) == 1
         self.lnV = None     # the last solve's ln V (at the ``solved`` points): Newton's guesses for the next
         self.last = None    # (V, tau, v) of the last evaluation of ``rates``
@@ -190,7 +191,7 @@ class QuasiDynamic:
         """The unknowns of a stage, y + h sum_l w_l k_l (the rows of ``k``, the first
         ``w.size`` of them), and their rates at time ``t`` into ``k[i]``: ``rates`` of them
         (one component on a window: its arithmetic in fewer passes, the same numbers)."""
-        if type(self) is not QuasiDynamic or not self._fused:
+        if not self._fused:
             yi = weighted(y, h, w, k)
             k[i] = self.rates(t, yi)
             return yi
@@ -239,7 +240,7 @@ class QuasiDynamic:
         (a node and its image once) and the solve's rates scattered back, compiled."""
         n, c = self.n, self.comps[0]
         if self._fused:
-            _into_box(y[:n], self.window.to_box, self.plate[c] * t, self.window.box_in())
+            into_box(y[:n], self.window.to_box, self.plate[c] * t, self.window.box_in())
             dy = np.empty_like(y)
             self._evaluate_one(t, y, self.window.convolve_one(), dy)
             return dy
@@ -436,9 +437,9 @@ def _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved):
 @njit()
 def _stage_into_box(y, h, w, k, to_box, shift, box):
     """A stage's unknowns y + h sum_l w_l k_l (integrate.weighted), and their slip less
-    ``shift`` into the window's ``box`` (window._into_box); returns the unknowns."""
+    ``shift`` into the window's ``box`` (window.into_box); returns the unknowns."""
     yi = weighted(y, h, w, k)
-    _into_box(yi, to_box, shift, box)
+    into_box(yi, to_box, shift, box)
     return yi
 
 

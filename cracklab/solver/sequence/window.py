@@ -110,7 +110,7 @@ class WindowedStatic:
         return out
 
     def _traction_one(self, slip, shift):
-        _into_box(slip, self.to_box, shift, self.box_in())
+        into_box(slip, self.to_box, shift, self.box_in())
         out = np.empty(self.points.size)
         _out_of_box(self.convolve_one(), self.from_box, out)
         return out
@@ -176,7 +176,7 @@ class WindowedStatic:
 
 
 @njit()
-def _into_box(values, to_box, shift, box):
+def into_box(values, to_box, shift, box):
     """box (row-major cells) = values[to_box] - shift."""
     m = box.shape[1]
     if m == 1:                  # a line (the plane problem): no division per cell
