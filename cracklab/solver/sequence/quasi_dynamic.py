@@ -18,7 +18,7 @@ from ...jit import njit
 from .integrate import weighted
 from .mirror import mirror_index
 from .static import StaticResponse
-from .window import WindowedStatic, into_box
+from .window import WindowedStatic, into_box, out_of_box
 
 
 class QuasiDynamic:
@@ -191,13 +191,11 @@ class QuasiDynamic:
         """The unknowns of a stage, y + h sum_l w_l k_l (the rows of ``k``, the first
         ``w.size`` of them), and their rates at time ``t`` into ``k[i]``: ``rates`` of them
         (one component on a window: its arithmetic in fewer passes, the same numbers)."""
-        if not self._fused:
-            yi = weighted(y, h, w, k)
+        yi = weighted(y, h, w, k)
+        if self._fused:
+            self._evaluate_one(t, yi, k[i])
+        else:
             k[i] = self.rates(t, yi)
-            return yi
-        win, n, c = self.window, self.n, self.comps[0]
-        yi = _stage_into_box(y, h, w, k, win.to_box, self.plate[c] * t, win.box_in())
-        self._evaluate_one(t, yi, win.convolve_one(), k[i])
         return yi
 
     def rates(self, t, y):
@@ -240,32 +238,31 @@ class QuasiDynamic:
         (a node and its image once) and the solve's rates scattered back, compiled."""
         n, c = self.n, self.comps[0]
         if self._fused:
-            into_box(y[:n], self.window.to_box, self.plate[c] * t, self.window.box_in())
-            dy = np.empty_like(y)
-            self._evaluate_one(t, y, self.window.convolve_one(), dy)
-            return dy
+            return self._evaluate_one(t, y, np.empty_like(y))
         F = self.elastic({c: y[:n]}, t)[c]
         tau = np.empty(n)
         T = np.empty(self._solve_at.size)
         psi = np.empty(self._solve_at.size)
         _gather(self.tau0[c], F, self.stiffness * self.plate[c] * t, self._image_at, self._slid, self._solve_at,
                 y[n:], tau, T, psi)
-        return self._solve_one(t, tau, T, psi, np.zeros_like(y))
+        return self._solve_one(tau, T, psi, np.zeros_like(y))
 
-    def _evaluate_one(self, t, y, box, dy):
-        """The rates at (t, y) into ``dy``, the static traction of y's slip on the window's
-        ``box`` (:meth:`WindowedStatic.convolve_one`): ``_rates_one``'s numbers."""
-        c = self.comps[0]
-        tau = np.empty(self.n)
+    def _evaluate_one(self, t, y, dy):
+        """The rates at (t, y) into ``dy`` on the window with FFTW (``_fused``): the slip into
+        the window's box, its static traction out of it (:meth:`WindowedStatic.convolve_one`),
+        ``_rates_one``'s numbers without the arrays between."""
+        n, c, win = self.n, self.comps[0], self.window
+        into_box(y[:n], win.to_box, self.plate[c] * t, win.box_in())
+        tau = np.empty(n)
         T = np.empty(self._solve_at.size)
         psi = np.empty(self._solve_at.size)
         spring = self.stiffness * self.plate[c] * t
-        _gather_box(box, self.window.from_box, spring if self.stiffness else 0.0, self.tau0[c], spring,
-                    self._image_at, self._slid, self._solve_at, y[self.n:], tau, T, psi)
+        _gather_box(win.convolve_one(), win.from_box, spring if self.stiffness else 0.0, self.tau0[c], spring,
+                    self._image_at, self._slid, self._solve_at, y[n:], tau, T, psi)
         dy[:] = 0.0
-        return self._solve_one(t, tau, T, psi, dy)
+        return self._solve_one(tau, T, psi, dy)
 
-    def _solve_one(self, t, tau, T, psi, dy):
+    def _solve_one(self, tau, T, psi, dy):
         """The solve at the points solved (``T``: |tau| there, ``psi``) and its rates scattered
         into ``dy`` (zero where they are not set); ``tau`` less the radiation damping."""
         n, c = self.n, self.comps[0]
@@ -412,13 +409,6 @@ def _gather(tau0, F, shift, image, slid, solve_at, psi, tau, T, psi_solved):
     at the points solved (``slid[solve_at]``) |tau| into T and psi into psi_solved."""
     for i in range(tau.size):
         tau[i] = tau0[i] + F[i] + shift
-    _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved)
-
-
-@njit()
-def _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved):
-    """tau made even about the ``image`` of each point (when given), and at the points solved
-    (``slid[solve_at]``) |tau| into T and psi into psi_solved."""
     if image.size:
         for i in range(tau.size):
             j = image[i]
@@ -435,27 +425,15 @@ def _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved):
 
 
 @njit()
-def _stage_into_box(y, h, w, k, to_box, shift, box):
-    """A stage's unknowns y + h sum_l w_l k_l (integrate.weighted), and their slip less
-    ``shift`` into the window's ``box`` (window.into_box); returns the unknowns."""
-    yi = weighted(y, h, w, k)
-    into_box(yi, to_box, shift, box)
-    return yi
-
-
-@njit()
 def _gather_box(box, from_box, spring_out, tau0, spring, image, slid, solve_at, psi, tau, T, psi_solved):
-    """_gather of the static traction on the window's ``box`` (the cell ``from_box[i]`` of
-    each point i), less ``spring_out`` (the spring's load the window's response leaves out:
+    """_gather of the static traction on the window's ``box`` (window.out_of_box, into tau),
+    less ``spring_out`` (the spring's load the window's response leaves out:
     QuasiDynamic.elastic) when it is not zero."""
-    m = box.shape[1]
-    for i in range(tau.size):
-        f = from_box[i]
-        F = box[f // m, f % m] if m > 1 else box[f, 0]
-        if spring_out != 0.0:
-            F = F - spring_out
-        tau[i] = tau0[i] + F + spring
-    _even_and_pick(image, slid, solve_at, psi, tau, T, psi_solved)
+    out_of_box(box, from_box, tau)
+    if spring_out != 0.0:
+        for i in range(tau.size):
+            tau[i] = tau[i] - spring_out
+    _gather(tau0, tau, spring, image, slid, solve_at, psi, tau, T, psi_solved)
 
 
 @njit()

@@ -112,7 +112,7 @@ class WindowedStatic:
     def _traction_one(self, slip, shift):
         into_box(slip, self.to_box, shift, self.box_in())
         out = np.empty(self.points.size)
-        _out_of_box(self.convolve_one(), self.from_box, out)
+        out_of_box(self.convolve_one(), self.from_box, out)
         return out
 
     def box_in(self):
@@ -188,7 +188,7 @@ def into_box(values, to_box, shift, box):
 
 
 @njit()
-def _out_of_box(box, from_box, out):
+def out_of_box(box, from_box, out):
     """out[q] = the cell from_box[q] of box (row-major)."""
     m = box.shape[1]
     if m == 1:
