@@ -35,6 +35,7 @@ import numpy as np
 from ..errors import InputError, SimulationError
 from ..jit import njit
 from .base import SHEAR, bonded_mask, check_parameter, parameter
+from . import elementary
 from .friction import NORMAL_STATE, Friction, normal_slip_scale, normal_time
 from .solve import solve_velocity
 
@@ -385,20 +386,157 @@ def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, b, dtL, q, ln2v0,
     return done
 
 
+#: evaluations the wide pass (:func:`_wide_loop`) takes a point to before it leaves it to the scalar pass
+WIDE_EVALUATIONS = 3
+
+
+def _wide_work(n):
+    """The work arrays of :func:`_wide_loop`, 24 of ``n`` floats, each its own allocation: the
+    compiler vectorises loops over them behind run-time checks that they do not overlap (over
+    the rows of one array it keeps the scalar loop, three times slower)."""
+    e = np.empty
+    return (e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n),
+            e(n), e(n), e(n), e(n), e(n), e(n), e(n))
+
+
+def _wide_loop(lo, hi, work, idx, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq,
+               ln2v0, sln2v0, f0, sf0, fw, sfw, Vw, sVw, Vi, sVi, law, mode, from_v, eta, bonded, has_bonded,
+               z_old, V_old, z, psi, V, lnV, strength, v1, v3, o1, o3, slow, masked):
+    """The ageing law's PREDICT or CORRECT pass of :func:`_slide_loop` at the points lo <= i <
+    hi that :func:`_fast_loop` left (``slow``), gathered, in loops the compiler vectorises:
+    the state update of :func:`_evolve` and at most WIDE_EVALUATIONS evaluations of
+    :func:`_newton` in the branch u = V exp(psi / a) / (2 V0) > e^18, without its bounds or
+    bisection; the same arithmetic in the same order, with exp, expm1, log and log1p of
+    laws/elementary.py (within a few ulp of the library's: the results agree with the scalar
+    pass to round-off). The points it does get ``slow`` 0, the others are left to
+    :func:`_slide_loop`; returns (evaluations, Newton solves, most evaluations of one solve)
+    of the points it did. ``work``: :func:`_wide_work`, ``idx``: CHUNK integers."""
+    correct = mode == CORRECT
+    tol = STEP_TOL if correct else PREDICT_TOL
+    tol2 = tol * tol
+    X1, X3, TT, AA, LC, XX, VV, LO, HI, ZN, PP, ST, WW, XN, IT, ZO, PS, VS, DL, QQ, BB, IA, L2, F0 = work
+    m = 0
+    for i in range(lo, hi):     # gather the points (scalar)
+        if slow[i] == 0 or (has_bonded and bonded[i]):
+            continue
+        x1 = t1[i] + g * l1[i * sl1]
+        x3 = t3[i] + g * l3[i * sl3]
+        T = math.sqrt(x1 * x1 + x3 * x3)
+        A = sig[i * ssig] * a[i * sa]
+        x0 = lnV[i]
+        # the scalar pass's other branches: no load, no friction, no guess
+        if not (T > 0.0 and A > 0.0 and eta > 0.0 and -740.0 < x0 < 700.0):
+            continue
+        idx[m] = i
+        Vg = V[i] if correct else V_old[i]           # the Newton guess: the prediction, or V_{n-1}
+        X1[m], X3[m], TT[m], AA[m], XX[m], VV[m] = x1, x3, T, A, x0, Vg
+        VS[m] = 0.5 * (V_old[i] + Vg) if correct else Vg    # the state's constant rate over the step
+        ZO[m], PS[m], DL[m], QQ[m], BB[m], IA[m], L2[m], F0[m] = (z_old[i], psi[i], dtL[i * sdtL], q[i * sq],
+                                                                  b[i * sb], ia[i * sia], ln2v0[i * sln2v0],
+                                                                  f0[i * sf0])
+        m += 1
+    for j in range(m):          # the state update of _evolve, ageing law (vector code)
+        s = VS[j] * DL[j]
+        zo = ZO[j]
+        qi = QQ[j]
+        series = s < 1e-4
+        e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH)) if series else _exp(-s)
+        phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH)) if series else -_expm1(-s) / s
+        zn = zo * e + qi * phi
+        r = (e - 1.0) + qi * phi / zo
+        near = abs(r) < 1e-4
+        p = PS[j] + BB[j] * r * (1.0 - r * (0.5 - r * THIRD)) if near else F0[j] + BB[j] * _log(zn)
+        lnc = p * IA[j] - L2[j]
+        ZN[j] = zn
+        PP[j] = p
+        LC[j] = lnc
+        LO[j] = -math.inf
+        HI[j] = math.inf
+        # IT: evaluations so far; 1000 + evaluations: converged (XX, VV the result); -1: to the scalar pass
+        IT[j] = 0.0 if (s < 708.0) & (near | (zn >= 2.2250738585072014e-308)) & (zn < math.inf) & (lnc == lnc) \
+            & (abs(p) < math.inf) else -1.0
+    left = m
+    for k in range(WIDE_EVALUATIONS):
+        if left == 0:
+            break
+        left = 0
+        for j in range(m):      # one evaluation of _newton (vector code)
+            going = (IT[j] >= 0.0) & (IT[j] < 1000.0)
+            x = XX[j]
+            Vc = VV[j]
+            lnu = LC[j] + x
+            A = AA[j]
+            G = TT[j] - eta * Vc - A * (lnu + LN2)
+            damping = eta * Vc
+            inverse = 1.0 / (damping + A)
+            step = G * inverse
+            w = damping * inverse
+            a_step = abs(step)
+            done = (G == 0.0) | (a_step < tol) | ((a_step < 1e-2) & (w * step * step < tol2))
+            # the next x: Newton's in x weighed with Newton's in V by w (_newton)
+            xn = x + step
+            if step > -1.0:
+                xn += w * step * step * (step * THIRD - 0.5) if a_step < 1e-2 else w * (_log1p(step) - step)
+            n = IT[j] + 1.0
+            ok = going & (lnu > 18.0)
+            LO[j] = x if going & (G > 0.0) else LO[j]
+            HI[j] = x if going & (G < 0.0) else HI[j]
+            inside = (abs(xn - x) < 0.5) & (LO[j] < xn) & (xn < HI[j]) & (xn < 700.0) & (xn > -700.0)
+            dx = xn - x
+            Vn = Vc * (1.0 + dx * (1.0 + dx * (0.5 + dx * (SIXTH + dx * TWENTYFOURTH)))) if abs(dx) < 1e-3 \
+                else _exp(xn)
+            Vd = Vc if G == 0.0 else _grow(Vc, step)
+            xd = x if G == 0.0 else x + step
+            VV[j] = (Vd if done else Vn) if ok & (done | inside) else Vc
+            XX[j] = (xd if done else xn) if ok & (done | inside) else x
+            left_j = ((1000.0 + n if done else n) if ok & (done | inside) else -1.0) if going else IT[j]
+            IT[j] = left_j
+            left += 1 if (left_j >= 0.0) & (left_j < 1000.0) else 0
+    total = 0
+    solves = 0
+    most = 0
+    for j in range(m):          # scatter the points solved (scalar)
+        W = VV[j]
+        if not (IT[j] > 1000.0 and W >= 0.0 and W < math.inf):
+            continue
+        i = idx[j]
+        it = int(IT[j] - 1000.0)
+        total += it
+        solves += 1
+        most = max(most, it)
+        T = TT[j]
+        V[i] = W
+        lnV[i] = XX[j]
+        scale = W / T
+        w1 = scale * X1[j]
+        w3 = scale * X3[j]
+        v1[i] = w1
+        v3[i] = w3
+        if correct:
+            z[i] = ZN[j]
+            psi[i] = PP[j]
+            strength[i] = T - eta * W
+            o1[i] = X1[j] - eta * w1
+            o3[i] = X3[j] - eta * w3
+        slow[i] = 0
+    return total, solves, most
+
 #: points per chunk of :func:`_chunked`: its arrays' share (about 25 doubles a point) stays
 #: in the core's cache between the two passes
 CHUNK = 2048
 
 
 def _chunked(n, chunk, fast, fast_args, slide_args):
-    """Step (v) over ``n`` points chunk by chunk: :func:`_fast_loop` (where ``fast``), then
-    :func:`_slide_loop` on the points it left, while the chunk is in cache; returns
-    :func:`_slide_loop`'s counts over all chunks, with the fast pass's points counted as one
-    evaluation each."""
+    """Step (v) over ``n`` points chunk by chunk: :func:`_fast_loop` and :func:`_wide_loop`
+    (where ``fast``), then :func:`_slide_loop` on the points they left, while the chunk is in
+    cache; returns :func:`_slide_loop`'s counts over all chunks with the vector passes'
+    (the fast pass's points counted as one evaluation each)."""
     total = 0
     solves = 0
     most = 0
     bad = -1
+    work = _wide_work(chunk if fast else 1)
+    idx = np.empty(chunk if fast else 1, dtype=np.int64)
     for lo in range(0, n, chunk):
         hi = min(n, lo + chunk)
         if fast:
@@ -407,6 +545,10 @@ def _chunked(n, chunk, fast, fast_args, slide_args):
             solves += done
             if done > 0:
                 most = max(most, 1)
+            t, k, m = _wide_loop(lo, hi, work, idx, *slide_args)
+            total += t
+            solves += k
+            most = max(most, m)
         t, k, m, b = _slide_loop(lo, hi, *slide_args)
         total += t
         solves += k
@@ -417,7 +559,10 @@ def _chunked(n, chunk, fast, fast_args, slide_args):
 
 
 _HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_fss", "_evolve")
-_PASSES = ("_slide_loop", "_fast_loop", "_rate_loop", "_evolve_loop")
+#: laws/elementary.py's functions, as the wide pass calls them
+_ELEMENTARY = {"_exp": "exp", "_expm1": "expm1", "_log": "log", "_log1p": "log1p"}
+_exp, _expm1, _log, _log1p = elementary.exp, elementary.expm1, elementary.log, elementary.log1p
+_PASSES = ("_slide_loop", "_fast_loop", "_wide_loop", "_wide_work", "_rate_loop", "_evolve_loop")
 _KERNEL = []
 #: LLVM vectorises a loop over several arrays only behind run-time checks that they do not
 #: overlap, and by default gives up beyond 8 such checks; numba has no way to declare its
@@ -502,8 +647,11 @@ def _kernel():
             for option in LLVM_OPTIONS:
                 llvm.set_option("", option)
             _compile_at(numba)
+            elementary.compile_functions()
             jit = njit(error_model="numpy")
             g = globals()
+            for name, source in _ELEMENTARY.items():
+                g[name] = getattr(elementary, source)
             for name in _HELPERS:           # the pass calls them by their global names, inlined
                 g[name] = njit(error_model="numpy", inline="always")(g[name])
             for name in _PASSES:            # :func:`_chunked` calls them by their global names

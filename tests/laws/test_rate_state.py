@@ -330,35 +330,41 @@ def test_a_resumed_run_is_the_uninterrupted_run(formulation):
     assert np.all(np.isfinite(whole[-1])) and whole[-1].max() > 1e-3
 
 
-def test_the_vector_pass_gives_the_scalar_pass_bit_for_bit(monkeypatch):
-    """The ageing law's fast pass (laws/rate_state._fast_loop: the common branches without
-    calls or early exits) leaves to the scalar pass only the points it cannot do, and the
-    run is the same to the bit as with the scalar pass alone (states, slip rates, Newton
-    counts), through nucleation and rupture."""
-    import hashlib
-
+def test_the_vector_passes_give_the_scalar_pass_to_round_off(monkeypatch):
+    """The ageing law's vector passes (laws/rate_state._fast_loop: the common branches
+    without calls or early exits, bit for bit; _wide_loop: the rupture's points, with
+    laws/elementary.py's exp, expm1, log and log1p, within a few ulp of the library's) leave
+    to the scalar pass only the points they cannot do, and the run agrees with the scalar
+    pass alone to round-off through nucleation and rupture: the slip rates within 1e-12 of
+    their largest at every step, states, slip rates and strengths at the end within 1e-11
+    relative (3e-15 and 1.3e-13 measured; Newton stops at 1e-10 relative in V, where a
+    stopping test decided the other way would show), the same Newton evaluations."""
     import cracklab.laws.rate_state as rs
     from cracklab.cli.bench import bench_scene
     from cracklab.solver.stepper import Stepper
 
     def run():
         stepper = Stepper(bench_scene(48, 48, "shear", 150, engine="exponential", law="rate_state"))
-        h, fast_share = hashlib.sha256(), []
+        steps, left = [], []
         for s in stepper:
-            for c in sorted(s.v):
-                h.update(np.ascontiguousarray(s.v[c]).tobytes())
+            steps.append(np.stack([s.v[c] for c in sorted(s.v)]))
             if "slow" in stepper.lstate:
-                fast_share.append(1.0 - stepper.lstate["slow"].mean())
+                left.append(stepper.lstate["slow"].mean())
         ls = stepper.lstate
-        for k in ("psi", "V", "lnV", "z", "strength"):
-            h.update(np.ascontiguousarray(ls[k]).tobytes())
-        return h.hexdigest(), (ls["newton_evaluations"], ls["newton_solves"], ls["newton_most"]), fast_share
+        end = {k: ls[k].copy() for k in ("psi", "V", "z", "strength")}
+        return np.array(steps), end, (ls["newton_evaluations"], ls["newton_solves"], ls["newton_most"]), left
 
     fast = run()
-    assert max(fast[2]) > 0.5          # the fast pass did most points at some step
     monkeypatch.setattr(rs, "_fast_kernel", lambda: None)
     scalar = run()
-    assert scalar[2] == [] and fast[:2] == scalar[:2]
+    # the vector passes did all but 1 % of the points over the run, all but 5 % at every step
+    assert scalar[3] == [] and np.mean(fast[3]) < 0.01 and max(fast[3]) < 0.05
+    assert fast[2] == scalar[2]
+    v, w = fast[0], scalar[0]
+    assert np.max(np.abs(v - w)) <= 1e-12 * np.max(np.abs(w)) and w.max() > 0.1     # a rupture, m/s
+    for k in ("psi", "V", "z", "strength"):
+        np.testing.assert_allclose(fast[1][k], scalar[1][k], rtol=1e-11, atol=0, err_msg=k)
+    assert not all(np.array_equal(fast[1][k], scalar[1][k]) for k in ("psi", "V", "z"))   # the wide pass ran
 
 
 def test_the_newton_step_grows_V_by_its_series_to_the_last_bits():
@@ -377,7 +383,7 @@ def test_the_newton_step_grows_V_by_its_series_to_the_last_bits():
 
 
 def test_the_fast_pass_compiles_to_vector_code(tmp_path):
-    """The fast pass is compiled into vector instructions (laws/rate_state.LLVM_OPTIONS: without
+    """The fast and wide passes are compiled into vector instructions (laws/rate_state.LLVM_OPTIONS: without
     them LLVM leaves the loop scalar, too many arrays to check for overlap). Compiled afresh
     in a child process, with its own numba cache (cached code cannot be inspected)."""
     import os
@@ -391,11 +397,11 @@ from cracklab.cli.bench import bench_scene
 from cracklab.solver.stepper import Stepper
 for _ in Stepper(bench_scene(32, 32, "shear", 6, engine="exponential", law="rate_state")):
     pass
-irs = [rs._fast_loop.inspect_llvm(sig) for sig in rs._fast_loop.signatures]
+irs = [f.inspect_llvm(sig) for f in (rs._fast_loop, rs._wide_loop) for sig in f.signatures]
 print(len(irs), min(len(re.findall(r"<[0-9]+ x double>", ir)) for ir in irs))
 """
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr
     compiled, vector_ops = map(int, out.stdout.split()[-2:])
-    assert compiled >= 1 and vector_ops > 20
+    assert compiled >= 2 and vector_ops > 20
