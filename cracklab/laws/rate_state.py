@@ -179,6 +179,11 @@ def _fss(law, V, lnv, a, b, f0, fw, Vw):
     return fss
 
 
+def _decay(s):
+    """(e^-s, (1 - e^-s) / s) of the ageing law's step for s < 1e-4: their series to s^3 and s^4."""
+    return 1.0 - s * (1.0 - s * (0.5 - s * SIXTH)), 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
+
+
 def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
     """(z, psi) after dt at the constant slip rate V >= 0 (exact) from z (and psi of z, for the
     ageing law): for the ageing law z = exp((psi - f0) / b) = V0 theta / L, for the slip laws
@@ -188,8 +193,7 @@ def _evolve(law, z, psi, V, lnV, a, ia, b, dtL, q, ln2v0, f0, fw, Vw):
     if law == AGEING:
         # theta' = theta e^-s + (L / V)(1 - e^-s), i.e. z' = z e^-s + q (1 - e^-s) / s
         if s < 1e-4:    # the series, to s^4 / 24
-            e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH))
-            phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
+            e, phi = _decay(s)
         else:
             e = math.exp(-s)
             phi = -math.expm1(-s) / s
@@ -350,8 +354,7 @@ def _fast_loop(lo, hi, t1, t3, g, l1, l3, sig, a, b, dtL, q, ln2v0,
         zo = z_old[i]
         qi = _at(q, i)
         s = Vs * _at(dtL, i)
-        e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH))
-        phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH))
+        e, phi = _decay(s)
         zn = zo * e + qi * phi
         r = (e - 1.0) + qi * phi / zo
         p = psi[i] + _at(b, i) * r * (1.0 - r * (0.5 - r * THIRD))
@@ -440,12 +443,13 @@ def _wide_loop(lo, hi, work, idx, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa,
         zo = ZO[j]
         qi = QQ[j]
         series = s < 1e-4
-        e = 1.0 - s * (1.0 - s * (0.5 - s * SIXTH)) if series else _exp(-s)
-        phi = 1.0 - s * (0.5 - s * (SIXTH - s * TWENTYFOURTH)) if series else -_expm1(-s) / s
+        e, phi = _decay(s)
+        e = e if series else elementary.exp(-s)
+        phi = phi if series else -elementary.expm1(-s) / s
         zn = zo * e + qi * phi
         r = (e - 1.0) + qi * phi / zo
         near = abs(r) < 1e-4
-        p = PS[j] + BB[j] * r * (1.0 - r * (0.5 - r * THIRD)) if near else F0[j] + BB[j] * _log(zn)
+        p = PS[j] + BB[j] * r * (1.0 - r * (0.5 - r * THIRD)) if near else F0[j] + BB[j] * elementary.log(zn)
         lnc = p * IA[j] - L2[j]
         ZN[j] = zn
         PP[j] = p
@@ -476,15 +480,14 @@ def _wide_loop(lo, hi, work, idx, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa,
             # the next x: Newton's in x weighed with Newton's in V by w (_newton)
             xn = x + step
             if step > -1.0:
-                xn += w * step * step * (step * THIRD - 0.5) if a_step < 1e-2 else w * (_log1p(step) - step)
+                xn += w * step * step * (step * THIRD - 0.5) if a_step < 1e-2 else w * (elementary.log1p(step) - step)
             n = IT[j] + 1.0
             ok = going & (lnu > 18.0)
             LO[j] = x if going & (G > 0.0) else LO[j]
             HI[j] = x if going & (G < 0.0) else HI[j]
             inside = (abs(xn - x) < 0.5) & (LO[j] < xn) & (xn < HI[j]) & (xn < 700.0) & (xn > -700.0)
             dx = xn - x
-            Vn = Vc * (1.0 + dx * (1.0 + dx * (0.5 + dx * (SIXTH + dx * TWENTYFOURTH)))) if abs(dx) < 1e-3 \
-                else _exp(xn)
+            Vn = _grow(Vc, dx) if abs(dx) < 1e-3 else elementary.exp(xn)     # _newton's series: _grow's below 1e-3
             Vd = Vc if G == 0.0 else _grow(Vc, step)
             xd = x if G == 0.0 else x + step
             VV[j] = (Vd if done else Vn) if ok & (done | inside) else Vc
@@ -558,10 +561,7 @@ def _chunked(n, chunk, fast, fast_args, slide_args):
     return total, solves, most, bad
 
 
-_HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_fss", "_evolve")
-#: laws/elementary.py's functions, as the wide pass calls them
-_ELEMENTARY = {"_exp": "exp", "_expm1": "expm1", "_log": "log", "_log1p": "log1p"}
-_exp, _expm1, _log, _log1p = elementary.exp, elementary.expm1, elementary.log, elementary.log1p
+_HELPERS = ("_lnsinh", "_asinh_exp", "_grow", "_bounds", "_newton", "_fss", "_decay", "_evolve")
 _PASSES = ("_slide_loop", "_fast_loop", "_wide_loop", "_wide_work", "_rate_loop", "_evolve_loop")
 _KERNEL = []
 #: LLVM vectorises a loop over several arrays only behind run-time checks that they do not
@@ -650,8 +650,6 @@ def _kernel():
             elementary.compile_functions()
             jit = njit(error_model="numpy")
             g = globals()
-            for name, source in _ELEMENTARY.items():
-                g[name] = getattr(elementary, source)
             for name in _HELPERS:           # the pass calls them by their global names, inlined
                 g[name] = njit(error_model="numpy", inline="always")(g[name])
             for name in _PASSES:            # :func:`_chunked` calls them by their global names
