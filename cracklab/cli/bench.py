@@ -152,13 +152,14 @@ def fft_pair_ms(grid, repeats=50, threads=1, components=(2,)):
 PAIR_EVERY = 10
 
 #: the stages of a step that ``run`` reports (``stages_ms``), in order: the transforms
-#: (Transforms' calls), the engines' advance of their states and start-up weights (push's
-#: advance, launch, start_weight), the caller's wait for an advance that runs on the engines'
+#: (Transforms' calls), the engines' advance of their states (push's advance, launch), the
+#: product rule's start-up weights E_0 (start_weight, and its value computed ahead with the
+#: advance: zero in the displacement scheme), the caller's wait for an advance that runs on the engines'
 #: worker thread (the engine's join less any advance the caller does in it: zero without the
 #: overlap), the taps (push less its advance and wait), the law (update, strength, solve,
 #: applied_strength) and the glue (the rest of the step: the scheme's passes, the load, the
 #: growth check)
-STAGES = ("transforms", "advance", "wait", "taps", "law", "glue")
+STAGES = ("transforms", "advance", "start", "wait", "taps", "law", "glue")
 #: in the timed half, the steps alternate in blocks of STAGE_BLOCK: plain (the median
 #: ``ms_per_step``), then timed by stage (``stages_ms``); a block spans every eighth of the
 #: exponential engine's staggered advance
@@ -191,7 +192,8 @@ class StageClock:
         for engine in engines:
             targets += [(engine, "push", "taps"), (engine, "launch", "advance")]
             targets += [(engine, name, stage) for name, stage in
-                        (("_advance", "advance"), ("_join", "wait"), ("start_weight", "advance"))
+                        (("_advance", "advance"), ("_join", "wait"), ("start_weight", "start"),
+                         ("_start_into", "start"))
                         if hasattr(engine, name)]
         self._targets = [t for t in targets if hasattr(t[0], t[1])]
         self.installed = False

@@ -122,7 +122,7 @@ def test_bench_reports_the_step_by_stage(monkeypatch, mode, solves):
     to the step timed by stage, set against the plain step (how close they come is the
     host's: reported, not asserted; the clock's own cost is a few microseconds per wrapped
     call). The displacement scheme solves the law once per step, the product scheme twice
-    (predictor and step)."""
+    (predictor and step); only the product scheme has start-up weights."""
     from cracklab.cli.bench import STAGES, run
 
     _sleepy_solve(monkeypatch)
@@ -133,6 +133,7 @@ def test_bench_reports_the_step_by_stage(monkeypatch, mode, solves):
     assert stages["glue"] < 0.5 * 1e3 * SLEEP
     assert stages["transforms"] > 0 and stages["advance"] > 0 and stages["taps"] > 0
     assert stages["wait"] < stages["advance"]           # no worker: nothing to wait for
+    assert (stages["start"] > 0) == (mode == "shear")     # E_0: the product scheme's
     total = sum(stages.values())
     assert abs(total / out["stages_total_ms"] - 1) < 1e-9, (total, out["stages_total_ms"])
     assert out["stages_vs_step"] == out["stages_total_ms"] / out["ms_per_step"]
@@ -170,6 +171,7 @@ def test_bench_stages_of_the_four_cases(monkeypatch, mode, law, bimaterial):
     solves = 1 if mode == "I" else 2           # displacement scheme: one solve; product: predictor and step
     assert stages["law"] >= solves * 1e3 * SLEEP
     assert stages["transforms"] > 0 and stages["advance"] > 0 and stages["taps"] > 0
+    assert (stages["start"] > 0) == (mode != "I")        # E_0: the product scheme's (shear, bimaterial)
     assert abs(sum(stages.values()) / out["stages_total_ms"] - 1) < 1e-9
     assert out["stages_vs_step"] == out["stages_total_ms"] / out["ms_per_step"]
     table = stage_table(out).splitlines()
@@ -192,8 +194,8 @@ def test_bench_text_report_has_the_stage_table():
     assert not any(line.strip().startswith(("stages_ms:", "stages_total_ms:")) for line in lines)
     start = next(i for i, line in enumerate(lines) if line.startswith("where the time goes"))
     assert lines[start + 2].split() == ["stage", "ms", "x", "FFT", "pair", "share"]
-    rows = [line.split()[0] for line in lines[start + 3:start + 10]]
-    assert rows == ["transforms", "advance", "wait", "taps", "law", "glue", "sum"]
+    rows = [line.split()[0] for line in lines[start + 3:start + 11]]
+    assert rows == ["transforms", "advance", "start", "wait", "taps", "law", "glue", "sum"]
     assert "the stages sum to" in lines[-1] and "slack" in lines[-1]
 
 
@@ -209,7 +211,7 @@ def test_bench_stages_with_the_overlap(monkeypatch):
     assert out["overlap"] and out["worker_ms"] > 0
     # the advance is the worker's: the caller's share of it is small against the known sleep
     # of the law (a bound with a wide margin, not a comparison of two timings of the same size)
-    assert stages["advance"] < 0.5 * 1e3 * SLEEP
+    assert stages["advance"] < 0.5 * 1e3 * SLEEP and stages["start"] < 0.5 * 1e3 * SLEEP
     assert stages["law"] >= 2e3 * SLEEP and stages["glue"] < 0.5 * 1e3 * SLEEP
     total = sum(stages.values())
     assert abs(total / out["stages_total_ms"] - 1) < 1e-9, (total, out["stages_total_ms"])
