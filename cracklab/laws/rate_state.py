@@ -156,8 +156,8 @@ def _newton(T, A, eta, lnc, x0, V0, tol):
                 return math.exp(xn), xn, it
         dx = xn - x
         x = xn
-        if abs(dx) < 1e-3:                # exp(x + dx) = V e^dx, the series to dx^5 / 120 < 1e-17
-            V = V * (1.0 + dx * (1.0 + dx * (0.5 + dx * (SIXTH + dx * TWENTYFOURTH))))
+        if abs(dx) < 1e-3:                # exp(x + dx) = V e^dx, _grow's series to dx^4
+            V = _grow(V, dx)
         else:
             V = math.exp(x)
     return V, x, -MAX_ITERATIONS
@@ -394,12 +394,12 @@ WIDE_EVALUATIONS = 3
 
 
 def _wide_work(n):
-    """The work arrays of :func:`_wide_loop`, 24 of ``n`` floats, each its own allocation: the
+    """The work arrays of :func:`_wide_loop`, 21 of ``n`` floats, each its own allocation: the
     compiler vectorises loops over them behind run-time checks that they do not overlap (over
     the rows of one array it keeps the scalar loop, three times slower)."""
     e = np.empty
     return (e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n), e(n),
-            e(n), e(n), e(n), e(n), e(n), e(n), e(n))
+            e(n), e(n), e(n), e(n))
 
 
 def _wide_loop(lo, hi, work, idx, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa, ia, sia, b, sb, dtL, sdtL, q, sq,
@@ -417,7 +417,7 @@ def _wide_loop(lo, hi, work, idx, t1, t3, g, l1, sl1, l3, sl3, sig, ssig, a, sa,
     correct = mode == CORRECT
     tol = STEP_TOL if correct else PREDICT_TOL
     tol2 = tol * tol
-    X1, X3, TT, AA, LC, XX, VV, LO, HI, ZN, PP, ST, WW, XN, IT, ZO, PS, VS, DL, QQ, BB, IA, L2, F0 = work
+    X1, X3, TT, AA, LC, XX, VV, LO, HI, ZN, PP, IT, ZO, PS, VS, DL, QQ, BB, IA, L2, F0 = work
     m = 0
     for i in range(lo, hi):     # gather the points (scalar)
         if slow[i] == 0 or (has_bonded and bonded[i]):
