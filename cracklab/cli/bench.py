@@ -154,11 +154,11 @@ PAIR_EVERY = 10
 #: the stages of a step that ``run`` reports (``stages_ms``), in order: the transforms
 #: (Transforms' calls), the engines' advance of their states (push's advance, launch), the
 #: product rule's start-up weights E_0 (start_weight, and its value computed ahead with the
-#: advance: zero in the displacement scheme), the caller's wait for an advance that runs on the engines'
-#: worker thread (the engine's join less any advance the caller does in it: zero without the
-#: overlap), the taps (push less its advance and wait), the law (update, strength, solve,
-#: applied_strength) and the glue (the rest of the step: the scheme's passes, the load, the
-#: growth check)
+#: advance: zero in the displacement scheme), the caller's wait for an advance that runs on
+#: the engines' worker thread (the engine's join less any advance the caller does in it:
+#: zero without the overlap), the taps (push less its advance and wait), the law (update,
+#: strength, solve, applied_strength) and the glue (the rest of the step: the scheme's
+#: passes, the load, the growth check)
 STAGES = ("transforms", "advance", "start", "wait", "taps", "law", "glue")
 #: in the timed half, the steps alternate in blocks of STAGE_BLOCK: plain (the median
 #: ``ms_per_step``), then timed by stage (``stages_ms``); a block spans every eighth of the
